@@ -1,0 +1,53 @@
+#include "cli.h"
+
+#include <cstdio>
+#include <exception>
+
+#include "linesight/core/error.h"
+
+namespace linesight::cli {
+
+int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>& body) {
+  const std::string name = app.get_name();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "%s: %s (see --help)\n", name.c_str(), e.what());
+    return kExitUsage;
+  }
+  try {
+    body();
+    return kExitOk;
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "%s: %s\n", name.c_str(), e.what());
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", name.c_str(), e.what());
+    return kExitRuntimeError;
+  }
+}
+
+void AddParamOption(CLI::App& app, std::vector<std::string>* raw) {
+  app.add_option(
+         "--param", *raw,
+         "method parameter key=value (repeatable, or comma-separated); see README per method")
+      ->delimiter(',');
+}
+
+std::map<std::string, std::string> ParseParams(const std::vector<std::string>& raw) {
+  std::map<std::string, std::string> out;
+  for (const std::string& entry : raw) {
+    const auto eq = entry.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw UsageError("--param '" + entry + "': expected key=value");
+    }
+    out[entry.substr(0, eq)] = entry.substr(eq + 1);
+  }
+  return out;
+}
+
+}  // namespace linesight::cli

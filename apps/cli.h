@@ -1,0 +1,29 @@
+// Shared plumbing for subcommands: argument parsing with CLI11 and the mapping of errors to exit
+// codes (0 success, 1 runtime error such as a bad file, 2 usage error). One line on stderr per
+// error.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+namespace linesight::cli {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitRuntimeError = 1;
+inline constexpr int kExitUsage = 2;
+
+// Parses argv with `app`, then calls `body`. Catches CLI11 errors (exit 2, or 0 for --help),
+// UsageError (2), InputError and other exceptions (1), and prints "linesight <command>: <message>"
+// on stderr.
+int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>& body);
+
+// Adds the --param key=value option (repeatable) and returns where the parsed values go.
+void AddParamOption(CLI::App& app, std::vector<std::string>* raw);
+// "p1=8,p2=32" / ["p1=8","p2=32"] -> {p1: 8, p2: 32}; throws UsageError for an entry without '='.
+std::map<std::string, std::string> ParseParams(const std::vector<std::string>& raw);
+
+}  // namespace linesight::cli

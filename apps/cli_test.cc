@@ -1,0 +1,209 @@
+// End-to-end tests of the CLI contract (DESIGN.md): --help everywhere, exit codes 0 / 1 / 2, one
+// clear line on stderr naming the file or value, and no output file left behind on error.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace {
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("linesight_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  RunResult Run(const std::string& args) {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(LINESIGHT_BINARY) + " " + args + " >" + out.string() +
+                            " 2>" + err.string() + " </dev/null";
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = Slurp(out);
+    r.err = Slurp(err);
+    fs::remove(out);
+    fs::remove(err);
+    return r;
+  }
+
+  // A textured pair whose right view is the left shifted by 8 px.
+  void WritePair(const fs::path& left, const fs::path& right, int width = 96, int height = 64) {
+    cv::Mat wide(height, width + 8, CV_8UC1);
+    cv::RNG rng(3);
+    rng.fill(wide, cv::RNG::UNIFORM, 0, 256);
+    cv::GaussianBlur(wide, wide, cv::Size(3, 3), 0.8);
+    ASSERT_TRUE(cv::imwrite(left.string(), wide(cv::Rect(0, 0, width, height))));
+    ASSERT_TRUE(cv::imwrite(right.string(), wide(cv::Rect(8, 0, width, height))));
+  }
+
+  size_t FileCount() const {
+    return static_cast<size_t>(
+        std::distance(fs::directory_iterator(dir_), fs::directory_iterator()));
+  }
+
+  fs::path dir_;
+};
+
+// Subcommand names as `linesight --help` lists them.
+std::vector<std::string> ListedCommands(const std::string& help) {
+  std::vector<std::string> names;
+  std::istringstream in(help.substr(help.find("commands:")));
+  std::string line;
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (std::regex_search(line, m, std::regex("^  ([a-z-]+) "))) names.push_back(m[1]);
+  }
+  return names;
+}
+
+TEST_F(CliTest, TopLevelHelpListsCommands) {
+  const RunResult r = Run("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  const auto names = ListedCommands(r.out);
+  EXPECT_GE(names.size(), 2u);
+  EXPECT_NE(std::find(names.begin(), names.end(), "disparity"), names.end());
+}
+
+TEST_F(CliTest, EverySubcommandHasHelp) {
+  for (const std::string& name : ListedCommands(Run("--help").out)) {
+    const RunResult r = Run(name + " --help");
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    EXPECT_FALSE(r.out.empty()) << name;
+  }
+}
+
+TEST_F(CliTest, EveryEvalStudyHasHelp) {
+  const RunResult top = Run("eval --help");
+  ASSERT_EQ(top.exit_code, 0);
+  std::istringstream in(top.out.substr(top.out.find("studies:")));
+  std::string line;
+  std::getline(in, line);
+  int studies = 0;
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (!std::regex_search(line, m, std::regex("^  ([a-z-]+) "))) continue;
+    ++studies;
+    const RunResult r = Run("eval " + std::string(m[1]) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << m[1] << ": " << r.err;
+  }
+  EXPECT_GE(studies, 1);
+}
+
+TEST_F(CliTest, UnknownCommandIsUsageError) {
+  const RunResult r = Run("frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown command 'frobnicate'"), std::string::npos);
+}
+
+TEST_F(CliTest, DisparityWritesAllOutputs) {
+  WritePair(dir_ / "l.png", dir_ / "r.png");
+  const RunResult r =
+      Run("disparity --left " + (dir_ / "l.png").string() + " --right " +
+          (dir_ / "r.png").string() + " --method sgbm --num-disp 24 --out " +
+          (dir_ / "d.pfm").string() + " --color " + (dir_ / "d.png").string() + " --kitti " +
+          (dir_ / "k.png").string() + " --json " + (dir_ / "r.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* f : {"d.pfm", "d.png", "k.png", "r.json"})
+    EXPECT_TRUE(fs::exists(dir_ / f)) << f;
+  EXPECT_NE(Slurp(dir_ / "r.json").find("\"density\""), std::string::npos);
+}
+
+TEST_F(CliTest, DisparityMissingFileNamesItAndWritesNothing) {
+  WritePair(dir_ / "l.png", dir_ / "r.png");
+  const RunResult r =
+      Run("disparity --left " + (dir_ / "l.png").string() + " --right " +
+          (dir_ / "nope.png").string() + " --method sgbm --out " + (dir_ / "d.pfm").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("nope.png"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
+}
+
+TEST_F(CliTest, DisparityUnreadableImageIsRuntimeError) {
+  WritePair(dir_ / "l.png", dir_ / "r.png");
+  std::ofstream(dir_ / "junk.png") << "this is not a PNG";
+  const RunResult r =
+      Run("disparity --left " + (dir_ / "junk.png").string() + " --right " +
+          (dir_ / "r.png").string() + " --method sgbm --out " + (dir_ / "d.pfm").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("junk.png"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
+}
+
+TEST_F(CliTest, DisparityDifferentSizesNamesBoth) {
+  WritePair(dir_ / "l.png", dir_ / "r.png", 96, 64);
+  WritePair(dir_ / "l2.png", dir_ / "r2.png", 80, 64);
+  const RunResult r =
+      Run("disparity --left " + (dir_ / "l.png").string() + " --right " +
+          (dir_ / "r2.png").string() + " --method sgbm --out " + (dir_ / "d.pfm").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("96x64"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("80x64"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
+}
+
+TEST_F(CliTest, UnknownMethodAndFlagAndParamAreUsageErrors) {
+  WritePair(dir_ / "l.png", dir_ / "r.png");
+  const std::string io = " --left " + (dir_ / "l.png").string() + " --right " +
+                         (dir_ / "r.png").string() + " --out " + (dir_ / "d.pfm").string();
+  RunResult r = Run("disparity --method magic" + io);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown method 'magic'"), std::string::npos) << r.err;
+  r = Run("disparity --method sgbm --bogus 3" + io);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--bogus"), std::string::npos) << r.err;
+  r = Run("disparity --method sgbm --param nonsense=1" + io);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nonsense"), std::string::npos) << r.err;
+  r = Run("disparity --method sgbm --num-disp 0" + io);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("num_disparities = 0"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
+}
+
+TEST_F(CliTest, EvalStereoOnOpenCvAloe) {
+  const fs::path data = LINESIGHT_OPENCV_DATA_DIR;
+  if (!fs::exists(data / "aloeGT.png"))
+    GTEST_SKIP() << "opencv-doc Aloe pair not installed at " << data;
+  const RunResult r = Run("eval stereo --data " + data.string() + " --methods sgbm --json " +
+                          (dir_ / "e.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("| aloe"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir_ / "e.json"));
+}
+
+TEST_F(CliTest, EvalStereoEmptyFolderIsRuntimeError) {
+  const RunResult r = Run("eval stereo --data " + dir_.string() + " --methods sgbm");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no benchmark scenes found"), std::string::npos) << r.err;
+}
+
+}  // namespace

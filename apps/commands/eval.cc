@@ -1,0 +1,125 @@
+// linesight eval <study>: `stereo` (benchmarks), `calibration` and `ranging` (simulation studies).
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "linesight/core/atomic_file.h"
+#include "linesight/core/error.h"
+#include "linesight/core/progress.h"
+#include "linesight/eval/eval_stereo.h"
+#include "linesight/io/json_io.h"
+#include "linesight/stereo/matcher.h"
+
+namespace linesight::cli {
+namespace {
+
+std::vector<std::string> SplitComma(const std::string& text) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? comma : comma - start);
+    if (!item.empty()) out.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+int RunEvalStereo(int argc, char** argv) {
+  CLI::App app{
+      "Run matchers on public stereo benchmarks (layouts found under --data) and score them "
+      "with the benchmarks' own metrics.",
+      "eval stereo"};
+  std::string data_dir, methods_text = "sgbm,bm", json_path, plots_dir, save_dir, markdown_path;
+  std::vector<std::string> raw_params;
+  std::vector<std::string> only_sets;
+  int threads = 0;
+  app.add_option("--data", data_dir, "folder holding benchmark scenes (searched recursively)")
+      ->required();
+  app.add_option("--methods", methods_text,
+                 fmt::format("comma-separated methods: {}", fmt::join(MatcherNames(), ", ")))
+      ->capture_default_str();
+  app.add_option("--sets", only_sets, "only these sets (folder names), comma-separated")
+      ->delimiter(',');
+  AddParamOption(app, &raw_params);
+  app.add_option("--threads", threads, "matcher threads (0 = all cores)")->capture_default_str();
+  app.add_option("--json", json_path, "JSON report (- for stdout)");
+  app.add_option("--markdown", markdown_path, "also write the markdown tables to this file");
+  app.add_option("--plots", plots_dir, "write colour disparity and error maps here");
+  app.add_option("--save-disparity", save_dir,
+                 "write every disparity map as <dir>/<set>/<scene>/<method>.pfm");
+  return RunCommand(app, argc, argv, [&] {
+    EvalStereoOptions options;
+    options.methods = SplitComma(methods_text);
+    options.params = ParseParams(raw_params);
+    options.threads = threads;
+    options.save_disparity_dir = save_dir;
+    options.plots_dir = plots_dir;
+    for (const auto& dir : {save_dir, plots_dir}) {
+      if (!dir.empty()) std::filesystem::create_directories(dir);
+    }
+    std::vector<SceneRef> scenes = FindScenes(data_dir);
+    if (!only_sets.empty()) {
+      std::erase_if(scenes, [&](const SceneRef& s) {
+        return std::find(only_sets.begin(), only_sets.end(), s.set) == only_sets.end();
+      });
+    }
+    if (scenes.empty()) {
+      throw InputError(
+          fmt::format("{}: no benchmark scenes found (expected Middlebury, KITTI, ETH3D, "
+                      "Scene Flow or opencv-doc Aloe layouts)",
+                      data_dir));
+    }
+    ProgressBar progress(static_cast<int64_t>(scenes.size() * options.methods.size()),
+                         "eval stereo");
+    const EvalStereoReport report = RunEvalStereo(scenes, options, &progress);
+    progress.Finish();
+    const std::string markdown = report.ToMarkdown();
+    std::cout << markdown << std::flush;
+    if (!markdown_path.empty()) WriteTextAtomic(markdown_path, markdown);
+    if (!json_path.empty()) WriteJson(json_path, report.ToJson());
+  });
+}
+
+struct Study {
+  const char* name;
+  int (*run)(int, char**);
+  const char* summary;
+};
+
+constexpr Study kStudies[] = {
+    {"stereo", RunEvalStereo, "matchers on public benchmarks (Middlebury, KITTI, ETH3D, ...)"},
+};
+
+void PrintEvalUsage(std::FILE* out) {
+  std::fprintf(
+      out,
+      "usage: linesight eval <study> [options]   (linesight eval <study> --help)\n\nstudies:\n");
+  for (const Study& s : kStudies) std::fprintf(out, "  %-12s %s\n", s.name, s.summary);
+}
+
+}  // namespace
+
+int RunEval(int argc, char** argv) {
+  if (argc < 2) {
+    PrintEvalUsage(stderr);
+    return kExitUsage;
+  }
+  if (!std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    PrintEvalUsage(stdout);
+    return kExitOk;
+  }
+  for (const Study& s : kStudies) {
+    if (!std::strcmp(argv[1], s.name)) return s.run(argc - 1, argv + 1);
+  }
+  std::fprintf(stderr, "eval: unknown study '%s' (see linesight eval --help)\n", argv[1]);
+  return kExitUsage;
+}
+
+}  // namespace linesight::cli

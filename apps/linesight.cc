@@ -1,0 +1,52 @@
+// linesight: binocular stereo ranging. A table of subcommands; each one parses its options and
+// calls the library (CONVENTIONS.md §13).
+#include <cstdio>
+#include <cstring>
+#include <string_view>
+
+#include "commands.h"
+
+namespace {
+
+struct Subcommand {
+  const char* name;
+  int (*run)(int argc, char** argv);
+  const char* summary;
+};
+
+constexpr Subcommand kSubcommands[] = {
+    {"disparity", linesight::cli::RunDisparity,
+     "dense disparity of a stereo pair (PFM / KITTI PNG / colour)"},
+    {"eval", linesight::cli::RunEval, "evaluate matchers on public benchmarks (eval stereo)"},
+};
+
+void PrintUsage(std::FILE* out) {
+  std::fprintf(out,
+               "linesight - binocular stereo vision ranging\n\n"
+               "usage: linesight <command> [options]   (linesight <command> --help for details)\n\n"
+               "commands:\n");
+  for (const Subcommand& c : kSubcommands) std::fprintf(out, "  %-11s %s\n", c.name, c.summary);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    PrintUsage(stderr);
+    return 2;
+  }
+  const std::string_view command = argv[1];
+  if (command == "--help" || command == "-h" || command == "help") {
+    PrintUsage(stdout);
+    return 0;
+  }
+  if (command == "--version") {
+    std::printf("linesight 0.1.0\n");
+    return 0;
+  }
+  for (const Subcommand& c : kSubcommands) {
+    if (command == c.name) return c.run(argc - 1, argv + 1);
+  }
+  std::fprintf(stderr, "linesight: unknown command '%s' (see linesight --help)\n", argv[1]);
+  return 2;
+}

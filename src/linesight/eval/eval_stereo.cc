@@ -1,0 +1,201 @@
+#include "linesight/eval/eval_stereo.h"
+
+#include <algorithm>
+#include <set>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/error.h"
+#include "linesight/core/progress.h"
+#include "linesight/core/timer.h"
+#include "linesight/io/disparity_io.h"
+#include "linesight/io/image_io.h"
+#include "linesight/io/pfm.h"
+#include "linesight/stereo/matcher.h"
+
+namespace linesight {
+namespace fs = std::filesystem;
+
+void EvalStereoOptions::Check() const {
+  CheckOption(!methods.empty(), "EvalStereoOptions.methods", "(empty)", "name at least one method");
+  CheckOption(threads >= 0, "EvalStereoOptions.threads", threads, "must be >= 0");
+}
+
+namespace {
+
+std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, std::string>& params,
+                                                   const std::string& method) {
+  std::map<std::string, std::string> out;
+  for (const auto& [key, value] : params) {
+    const auto dot = key.find('.');
+    if (dot == std::string::npos) {
+      out[key] = value;
+    } else if (key.substr(0, dot) == method) {
+      out[key.substr(dot + 1)] = value;
+    }
+  }
+  return out;
+}
+
+void SaveOutputs(const EvalStereoOptions& options, const StereoScene& scene,
+                 const std::string& method, const cv::Mat& disparity) {
+  const fs::path rel = fs::path(scene.ref.set) / scene.ref.name;
+  if (!options.save_disparity_dir.empty()) {
+    const fs::path dir = options.save_disparity_dir / rel;
+    fs::create_directories(dir);
+    WritePfm(dir / (method + ".pfm"), disparity);
+  }
+  if (!options.plots_dir.empty()) {
+    const fs::path dir = options.plots_dir / rel;
+    fs::create_directories(dir);
+    const float lo = static_cast<float>(scene.min_disparity);
+    const float hi = static_cast<float>(scene.min_disparity + scene.num_disparities - 1);
+    WriteImage(dir / (method + "_disparity.png"), ColorizeDisparityWithLegend(disparity, lo, hi));
+    WriteImage(dir / (method + "_error.png"),
+               ColorizeDisparityError(disparity, scene.ground_truth));
+    const fs::path gt = dir / "ground_truth.png";
+    if (!fs::exists(gt)) WriteImage(gt, ColorizeDisparityWithLegend(scene.ground_truth, lo, hi));
+  }
+}
+
+std::string Fmt2(double v) { return fmt::format("{:.2f}", v); }
+
+}  // namespace
+
+PrimaryMetric PrimaryMetricFor(const EvalStereoResult& r) {
+  const bool has_nonocc = r.regions.count("nonocc") > 0;
+  const std::string region = has_nonocc ? "nonocc" : "all";
+  auto find = [&](const std::string& reg) -> const DisparityMetrics& { return r.regions.at(reg); };
+  if (r.set.find("kitti") != std::string::npos) {
+    return {"D1 all", "all", find("all").d1};
+  }
+  if (r.set.find("2005") != std::string::npos || r.set.find("2006") != std::string::npos ||
+      r.set.find("2014") != std::string::npos) {
+    return {"bad-2.0 " + region, region, find(region).bad[2]};
+  }
+  return {"bad-1.0 " + region, region, find(region).bad[1]};
+}
+
+EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
+                               const EvalStereoOptions& options, ProgressBar* progress) {
+  options.Check();
+  // Fail on unknown methods / parameters before any scene is loaded.
+  for (const std::string& method : options.methods) {
+    MatcherOptions probe;
+    probe.params = ParamsForMethod(options.params, method);
+    CreateMatcher(method, probe);
+  }
+  EvalStereoReport report;
+  for (const SceneRef& ref : scenes) {
+    const StereoScene scene = LoadScene(ref);
+    for (const std::string& method : options.methods) {
+      MatcherOptions matcher_options;
+      matcher_options.min_disparity = scene.min_disparity;
+      matcher_options.num_disparities = scene.num_disparities;
+      matcher_options.threads = options.threads;
+      matcher_options.params = ParamsForMethod(options.params, method);
+      auto matcher = CreateMatcher(method, matcher_options);
+      Stopwatch watch;
+      const cv::Mat disparity = matcher->Compute(scene.left, scene.right);
+      const double ms = watch.ElapsedMs();
+
+      EvalStereoResult result;
+      result.set = ref.set;
+      result.scene = ref.name;
+      result.method = method;
+      result.width = scene.left.cols;
+      result.height = scene.left.rows;
+      result.min_disparity = scene.min_disparity;
+      result.num_disparities = scene.num_disparities;
+      result.ms = ms;
+      result.mde_s = MdePerSecond(result.width, result.height, result.num_disparities, ms);
+      result.settings = matcher->Settings();
+      for (const auto& [region, mask] : scene.masks) {
+        result.regions[region] = ComputeDisparityMetrics(disparity, scene.ground_truth, mask);
+      }
+      SaveOutputs(options, scene, method, disparity);
+      report.results.push_back(std::move(result));
+      if (progress) progress->Advance(1, fmt::format("{}/{} {}", ref.set, ref.name, method));
+    }
+  }
+  return report;
+}
+
+nlohmann::json EvalStereoReport::ToJson() const {
+  nlohmann::json scenes = nlohmann::json::array();
+  for (const EvalStereoResult& r : results) {
+    nlohmann::json regions = nlohmann::json::object();
+    for (const auto& [name, metrics] : r.regions) regions[name] = metrics.ToJson();
+    const PrimaryMetric primary = PrimaryMetricFor(r);
+    scenes.push_back({{"set", r.set},
+                      {"scene", r.scene},
+                      {"method", r.method},
+                      {"width", r.width},
+                      {"height", r.height},
+                      {"min_disparity", r.min_disparity},
+                      {"num_disparities", r.num_disparities},
+                      {"ms", r.ms},
+                      {"mde_per_s", r.mde_s},
+                      {"primary", {{"label", primary.label}, {"value", primary.value}}},
+                      {"regions", regions},
+                      {"settings", r.settings}});
+  }
+  return {{"scenes", scenes}};
+}
+
+std::string EvalStereoReport::ToMarkdown() const {
+  std::string out;
+  std::vector<std::string> sets;
+  for (const auto& r : results) {
+    if (std::find(sets.begin(), sets.end(), r.set) == sets.end()) sets.push_back(r.set);
+  }
+  for (const std::string& set : sets) {
+    std::vector<const EvalStereoResult*> rows;
+    std::vector<std::string> methods;
+    for (const auto& r : results) {
+      if (r.set != set) continue;
+      rows.push_back(&r);
+      if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) {
+        methods.push_back(r.method);
+      }
+    }
+    const std::string primary_label = PrimaryMetricFor(*rows.front()).label;
+    const std::string region = PrimaryMetricFor(*rows.front()).region;
+    out += fmt::format(
+        "### {}\n\nDense metrics (a pixel without an estimate is an error) on region `{}`; "
+        "headline: {}.\n\n",
+        set, region, primary_label);
+    out +=
+        "| scene | method | bad-0.5 | bad-1 | bad-2 | bad-4 | D1 | avgerr | rmse | density | ms | "
+        "MDE/s |\n";
+    out += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const EvalStereoResult* r : rows) {
+      const DisparityMetrics& m = r->regions.at(region);
+      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} | {:.0f} |\n",
+                         r->scene, r->method, Fmt2(m.bad[0]), Fmt2(m.bad[1]), Fmt2(m.bad[2]),
+                         Fmt2(m.bad[3]), Fmt2(m.d1), Fmt2(m.avgerr), Fmt2(m.rmse), Fmt2(m.density),
+                         r->ms, r->mde_s);
+    }
+    out += fmt::format(
+        "\nAverage over {} scene(s):\n\n| method | {} | density | ms |\n|---|---|---|---|\n",
+        rows.size() / methods.size(), primary_label);
+    for (const std::string& method : methods) {
+      double sum = 0, density = 0, ms = 0;
+      int n = 0;
+      for (const EvalStereoResult* r : rows) {
+        if (r->method != method) continue;
+        sum += PrimaryMetricFor(*r).value;
+        density += r->regions.at(region).density;
+        ms += r->ms;
+        ++n;
+      }
+      out +=
+          fmt::format("| {} | {:.2f} | {:.2f} | {:.1f} |\n", method, sum / n, density / n, ms / n);
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace linesight

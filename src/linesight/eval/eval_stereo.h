@@ -1,0 +1,63 @@
+// `linesight eval stereo`: runs matchers over benchmark scenes and scores them with the benchmarks'
+// metrics.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "linesight/eval/dataset.h"
+#include "linesight/eval/metrics.h"
+
+namespace linesight {
+
+class ProgressBar;
+
+struct EvalStereoOptions {
+  std::vector<std::string> methods = {"sgbm"};  // factory names (CreateMatcher)
+  // Method parameters: "method.key" applies to that method only, a plain "key" to every method
+  // (each method then must know it).
+  std::map<std::string, std::string> params;
+  int threads = 0;                           // matcher threads, 0 = all cores
+  std::filesystem::path save_disparity_dir;  // if set: <dir>/<set>/<scene>/<method>.pfm
+  std::filesystem::path plots_dir;  // if set: colour disparity and error maps per scene/method
+
+  void Check() const;
+};
+
+struct EvalStereoResult {
+  std::string set, scene, method;
+  int width = 0, height = 0, min_disparity = 0, num_disparities = 0;
+  double ms = 0;     // wall time of Compute (one run, includes first-use allocation)
+  double mde_s = 0;  // width * height * num_disparities / (ms / 1000) / 1e6
+  std::map<std::string, DisparityMetrics>
+      regions;  // "nonocc", "all", "disc" where the set has them
+  nlohmann::json settings;
+};
+
+// The benchmark's headline figure for a set ("bad-1 nonocc" for Middlebury 2001/2003, "bad-2
+// nonocc" for 2005/2006 and 2014, "bad-1 nonocc" for ETH3D, "D1 all" for KITTI, "bad-1 nonocc"
+// otherwise).
+struct PrimaryMetric {
+  std::string label;   // e.g. "bad-2.0 nonocc"
+  std::string region;  // e.g. "nonocc"
+  double value = 0;    // percent, dense
+};
+PrimaryMetric PrimaryMetricFor(const EvalStereoResult& result);
+
+struct EvalStereoReport {
+  std::vector<EvalStereoResult> results;  // scene-major, then method in the requested order
+  nlohmann::json ToJson() const;
+  // One markdown table per set (rows scene x method) followed by the per-set averages per method.
+  std::string ToMarkdown() const;
+};
+
+// Loads each scene, runs every method, computes the metrics. Throws InputError/UsageError for bad
+// input (unknown method, unreadable scene). `progress` may be null.
+EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
+                               const EvalStereoOptions& options, ProgressBar* progress = nullptr);
+
+}  // namespace linesight

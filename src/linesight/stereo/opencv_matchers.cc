@@ -1,0 +1,151 @@
+#include "linesight/stereo/opencv_matchers.h"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/utility.hpp>
+
+#include "linesight/core/error.h"
+
+namespace linesight {
+namespace {
+
+// OpenCV wants a multiple of 16; we search the next one up and cut the result back to the request.
+int RoundUpTo16(int n) { return (n + 15) / 16 * 16; }
+
+void CheckPair(const cv::Mat& left, const cv::Mat& right) {
+  if (left.empty() || right.empty()) throw InputError("matcher input image is empty");
+  if (left.size() != right.size()) {
+    throw InputError(fmt::format("left image is {}x{} but right image is {}x{}", left.cols,
+                                 left.rows, right.cols, right.rows));
+  }
+}
+
+class OpenCvBlockMatcher final : public StereoMatcher {
+ public:
+  OpenCvBlockMatcher(const MatcherOptions& options, MatcherParams& params) : options_(options) {
+    block_ = params.GetInt("block", 15);
+    uniqueness_ = params.GetInt("uniqueness", 15);
+    texture_ = params.GetInt("texture", 10);
+    speckle_window_ = params.GetInt("speckle_window", 100);
+    speckle_range_ = params.GetInt("speckle_range", 2);
+    prefilter_cap_ = params.GetInt("prefilter_cap", 31);
+    CheckOption(block_ >= 5 && block_ <= 255 && block_ % 2 == 1, "bm.block", block_,
+                "must be odd and in [5, 255]");
+    CheckOption(uniqueness_ >= 0, "bm.uniqueness", uniqueness_, "must be >= 0");
+    CheckOption(texture_ >= 0, "bm.texture", texture_, "must be >= 0");
+    CheckOption(speckle_window_ >= 0, "bm.speckle_window", speckle_window_, "must be >= 0");
+    CheckOption(speckle_range_ >= 0, "bm.speckle_range", speckle_range_, "must be >= 0");
+    CheckOption(prefilter_cap_ >= 1 && prefilter_cap_ <= 63, "bm.prefilter_cap", prefilter_cap_,
+                "must be in [1, 63]");
+    bm_ = cv::StereoBM::create(RoundUpTo16(options_.num_disparities), block_);
+    bm_->setMinDisparity(options_.min_disparity);
+    bm_->setUniquenessRatio(uniqueness_);
+    bm_->setTextureThreshold(texture_);
+    bm_->setSpeckleWindowSize(speckle_window_);
+    bm_->setSpeckleRange(speckle_range_ * 16);
+    bm_->setPreFilterCap(prefilter_cap_);
+    bm_->setDisp12MaxDiff(1);
+  }
+
+  std::string Name() const override { return "bm"; }
+
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
+    CheckPair(left, right);
+    if (options_.threads > 0) cv::setNumThreads(options_.threads);
+    cv::Mat fixed;
+    bm_->compute(ToGray8(left), ToGray8(right), fixed);
+    return FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
+  }
+
+  nlohmann::json Settings() const override {
+    return {{"method", "bm"},
+            {"min_disparity", options_.min_disparity},
+            {"num_disparities", options_.num_disparities},
+            {"block", block_},
+            {"uniqueness", uniqueness_},
+            {"texture", texture_},
+            {"speckle_window", speckle_window_},
+            {"speckle_range", speckle_range_},
+            {"prefilter_cap", prefilter_cap_}};
+  }
+
+ private:
+  MatcherOptions options_;
+  int block_, uniqueness_, texture_, speckle_window_, speckle_range_, prefilter_cap_;
+  cv::Ptr<cv::StereoBM> bm_;
+};
+
+class OpenCvSgbm final : public StereoMatcher {
+ public:
+  OpenCvSgbm(const MatcherOptions& options, MatcherParams& params) : options_(options) {
+    mode_ = params.GetString("mode", "3way", {"sgbm", "hh", "3way", "hh4"});
+    block_ = params.GetInt("block", 5);
+    p1_ = params.GetInt("p1", 8 * block_ * block_);
+    p2_ = params.GetInt("p2", 32 * block_ * block_);
+    uniqueness_ = params.GetInt("uniqueness", 10);
+    speckle_window_ = params.GetInt("speckle_window", 100);
+    speckle_range_ = params.GetInt("speckle_range", 2);
+    disp12_max_diff_ = params.GetInt("disp12_max_diff", 1);
+    prefilter_cap_ = params.GetInt("prefilter_cap", 63);
+    CheckOption(block_ >= 1 && block_ <= 31 && block_ % 2 == 1, "sgbm.block", block_,
+                "must be odd and in [1, 31]");
+    CheckOption(p1_ >= 0, "sgbm.p1", p1_, "must be >= 0");
+    CheckOption(p2_ > p1_, "sgbm.p2", p2_, "must be > p1");
+    CheckOption(uniqueness_ >= 0, "sgbm.uniqueness", uniqueness_, "must be >= 0");
+    CheckOption(speckle_window_ >= 0, "sgbm.speckle_window", speckle_window_, "must be >= 0");
+    CheckOption(speckle_range_ >= 0, "sgbm.speckle_range", speckle_range_, "must be >= 0");
+    CheckOption(prefilter_cap_ >= 1, "sgbm.prefilter_cap", prefilter_cap_, "must be >= 1");
+    const int mode = mode_ == "sgbm"  ? cv::StereoSGBM::MODE_SGBM
+                     : mode_ == "hh"  ? cv::StereoSGBM::MODE_HH
+                     : mode_ == "hh4" ? cv::StereoSGBM::MODE_HH4
+                                      : cv::StereoSGBM::MODE_SGBM_3WAY;
+    sgbm_ = cv::StereoSGBM::create(options_.min_disparity, RoundUpTo16(options_.num_disparities),
+                                   block_, p1_, p2_, disp12_max_diff_, prefilter_cap_, uniqueness_,
+                                   speckle_window_, speckle_range_ * 16, mode);
+  }
+
+  std::string Name() const override { return "sgbm"; }
+
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
+    CheckPair(left, right);
+    if (options_.threads > 0) cv::setNumThreads(options_.threads);
+    cv::Mat fixed;
+    sgbm_->compute(ToGray8(left), ToGray8(right), fixed);
+    return FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
+  }
+
+  nlohmann::json Settings() const override {
+    return {{"method", "sgbm"},
+            {"mode", mode_},
+            {"min_disparity", options_.min_disparity},
+            {"num_disparities", options_.num_disparities},
+            {"block", block_},
+            {"p1", p1_},
+            {"p2", p2_},
+            {"uniqueness", uniqueness_},
+            {"speckle_window", speckle_window_},
+            {"speckle_range", speckle_range_},
+            {"disp12_max_diff", disp12_max_diff_},
+            {"prefilter_cap", prefilter_cap_}};
+  }
+
+ private:
+  MatcherOptions options_;
+  std::string mode_;
+  int block_, p1_, p2_, uniqueness_, speckle_window_, speckle_range_, disp12_max_diff_,
+      prefilter_cap_;
+  cv::Ptr<cv::StereoSGBM> sgbm_;
+};
+
+}  // namespace
+
+std::unique_ptr<StereoMatcher> CreateOpenCvBlockMatcher(const MatcherOptions& options,
+                                                        MatcherParams& params) {
+  return std::make_unique<OpenCvBlockMatcher>(options, params);
+}
+
+std::unique_ptr<StereoMatcher> CreateOpenCvSgbm(const MatcherOptions& options,
+                                                MatcherParams& params) {
+  return std::make_unique<OpenCvSgbm>(options, params);
+}
+
+}  // namespace linesight
