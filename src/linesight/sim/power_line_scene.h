@@ -1,0 +1,307 @@
+// Synthetic power-line scenes with exact ground truth (issue 5, item 1).
+//
+// A stereo rig modelled on the MYNT S1030 (752x480, fx ~ 736 px, baseline ~ 119 mm, plumb-bob
+// distortion, slightly misaligned cameras) looks along a power-line conductor. Obstacles sit on the
+// line at chosen distances: a Stockbridge damper ("damper"), a suspension clamp ("clamp") and an
+// insulator string
+// ("insulator"). Background: sky gradient with clouds, lattice towers, textured terrain.
+//
+// Rendering is ray casting through each camera's *distorted* model: every raw pixel is undistorted
+// to a ray (iterated to 1e-12 in normalised coordinates) that is intersected with analytic geometry
+// (spheres, capped cylinders and cones, boxes, planes; the sagging conductor is a chain of capsules
+// along a catenary), with S x S supersampling per pixel. Shading is Lambertian (sun + sky ambient)
+// and every texture is defined in 3D world/object coordinates, so a surface point has the same
+// colour in both views.
+//
+// Ground truth is ray cast with the same geometry through the RECTIFIED left camera (P1, R1 of the
+// true calibration, filled by cv::stereoRectify with alpha 0 and CALIB_ZERO_DISPARITY), one ray
+// through each pixel centre (OpenCV convention: pixel (u, v) is centred on integer coordinates), so
+// it is exact:
+//   depth(v, u)     = Z of the hit point in the rectified left camera frame (metres),
+//   disparity(v, u) = f * B / Z  with f = P1(0,0), B = -P2(0,3) / P2(0,0)  (pixels, rectified
+//   images),
+// and +inf where the ray hits nothing (sky).
+//
+// Frames: the scene is modelled in the raw left camera frame ("left": x right, y down, z forward,
+// metres). "rect" is the rectified left camera frame: X_rect = R1 * X_left. The true extrinsic is
+// right_from_left: X_right = R * X_left + T.
+//
+// Obstacle distance (what ranging must reproduce): the distance from the left camera centre to the
+// obstacle's nearest surface measured along the RECTIFIED left optical axis, i.e. the minimum of
+// Z_rect over the obstacle's whole surface, computed analytically from its primitives. That nearest
+// point is never self-occluded (any point in front of it on the same ray would have a smaller Z);
+// it can be hidden by another object or lie outside the image at very short range, which is why
+// RenderedObstacle also reports `visible_min_depth_m`, the minimum of the ground-truth depth over
+// the obstacle's visible pixels. Obstacles are placed so that `distance_m` equals the requested
+// distance (to ~1e-9 m).
+//
+// Everything is deterministic: the same options (including the seed) give identical bytes on every
+// run and any number of threads.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "linesight/io/stereo_calibration.h"
+
+namespace linesight::sim {
+
+// ----------------------------------------------------------------------------------------------------------
+// Camera rig
+// ----------------------------------------------------------------------------------------------------------
+
+// One pinhole camera with plumb-bob distortion (OpenCV order k1 k2 p1 p2 k3).
+struct CameraIntrinsics {
+  double fx = 736.0;                                          // focal length along x (px)
+  double fy = 736.0;                                          // focal length along y (px)
+  double cx = 376.0;                                          // principal point x (px)
+  double cy = 240.0;                                          // principal point y (px)
+  std::array<double, 5> distortion{0.0, 0.0, 0.0, 0.0, 0.0};  // k1 k2 p1 p2 k3 (dimensionless)
+
+  cv::Matx33d CameraMatrix() const;
+  cv::Mat DistortionCoefficients() const;  // 1x5 CV_64F
+};
+
+// Stereo rig modelled on the MYNT S1030: both cameras differ slightly in focal length and principal
+// point, lenses have small radial/tangential distortion, and the right camera is rotated by a
+// fraction of a degree and offset a little in y/z so that rectification matters.
+struct StereoRigOptions {
+  cv::Size image_size{752, 480};  // width x height (px)
+  CameraIntrinsics left{736.2, 735.4, 378.3, 238.6, {-0.048, 0.061, 0.00031, -0.00024, 0.0}};
+  CameraIntrinsics right{738.1, 737.6, 372.9, 242.2, {-0.052, 0.067, -0.00018, 0.00027, 0.0}};
+  // right_from_left rotation as a Rodrigues vector (rad): about 0.25 deg tilt, 0.3 deg pan, 0.2 deg
+  // roll.
+  cv::Vec3d right_from_left_rotation{0.0044, -0.0052, 0.0035};
+  // right_from_left translation (m): X_right = R * X_left + T; the baseline is ~ |T| = 119 mm.
+  cv::Vec3d right_from_left_translation{-0.11898, 0.0011, -0.0007};
+
+  void Check() const;  // OptionError naming the field
+};
+
+// The true calibration of the rig: M1 D1 M2 D2 R T E F, and R1 R2 P1 P2 Q from cv::stereoRectify
+// with alpha = 0 and CALIB_ZERO_DISPARITY.
+StereoCalibration MakeStereoCalibration(const StereoRigOptions& rig);
+
+// ----------------------------------------------------------------------------------------------------------
+// Sensor model (shared by scenes and calibration boards)
+// ----------------------------------------------------------------------------------------------------------
+
+struct SensorOptions {
+  int supersampling = 3;    // S: S x S rays per raw pixel for anti-aliasing, 1..8
+  double exposure = 1.0;    // multiplies scene radiance before encoding (> 0); 1 = nominal
+  double right_gain = 1.0;  // extra gain of the right camera relative to the left (> 0)
+  double gamma = 2.2;       // encoding gamma: DN = 255 * (exposure * L)^(1/gamma), 1 = linear
+  double vignetting = 0.0;  // relative fall-off at the image corner: gain = 1 - v * (r/r_corner)^2
+  double blur_sigma_px = 0.0;   // Gaussian optical blur of the raw images (px), 0 = none
+  double noise_sigma_dn = 1.0;  // additive Gaussian read noise (DN, 8-bit scale), 0 = none
+  double shot_noise_electrons =
+      0;  // > 0 enables shot noise: full scale (255 DN) = this many electrons
+  // Seed of the sensor noise; unset = derived from the scene/board seed. Set it to take fresh noise
+  // on the same scene (the noise-free image does not depend on it).
+  std::optional<std::uint64_t> noise_seed;
+
+  void Check() const;
+};
+
+// ----------------------------------------------------------------------------------------------------------
+// Power-line scene
+// ----------------------------------------------------------------------------------------------------------
+
+enum class ObstacleType {
+  kDamper,  // Stockbridge damper: clamp on the conductor, messenger cable, two dumbbell weights
+  kSuspensionClamp,  // suspension clamp: boat-shaped body around the conductor with a yoke on top
+  kInsulatorString,  // insulator string: stack of disc sheds hanging from a crossarm, with its
+                     // clamp
+};
+
+// "damper", "clamp", "insulator".
+std::string ObstacleTypeName(ObstacleType type);
+// Accepts the names above (also "counterweight", "stockbridge", "suspension_clamp",
+// "insulator_string"); throws InputError listing the valid names.
+ObstacleType ParseObstacleType(std::string_view name);
+std::vector<ObstacleType> AllObstacleTypes();
+
+struct ObstacleSpec {
+  ObstacleType type = ObstacleType::kDamper;
+  double distance_m = 1.5;  // requested true distance (see the file comment), 0.2..80 m
+  int conductor = 0;        // index of the conductor it sits on (0 = the one the robot rides)
+};
+
+// "damper:1.5,clamp:3,insulator:4.5" (type:distance_m[:conductor], comma separated). Throws
+// InputError naming the offending entry.
+std::vector<ObstacleSpec> ParseObstacleSpecs(std::string_view text);
+
+struct PowerLineSceneOptions {
+  StereoRigOptions rig;
+  SensorOptions sensor;
+  std::uint64_t seed =
+      1;  // scene variation: textures, clouds, towers, terrain; and the default noise seed
+
+  // Obstacles in the default scene: three types spread out along the line.
+  std::vector<ObstacleSpec> obstacles{{ObstacleType::kDamper, 1.5, 0},
+                                      {ObstacleType::kSuspensionClamp, 3.0, 0},
+                                      {ObstacleType::kInsulatorString, 4.5, 0}};
+
+  // Conductors. Conductor 0 passes the left camera centre at this lateral/vertical offset (left
+  // frame, m) at z = 0 and runs away from the camera along +z (turned by yaw/pitch); the others are
+  // parallel to it, spaced along x.
+  int num_conductors = 2;               // 1..4
+  double conductor_offset_x_m = -0.06;  // x of conductor 0 at z = 0 (m)
+  double conductor_offset_y_m =
+      0.09;                           // y of conductor 0 at z = 0 (m, +y is down: below the camera)
+  double conductor_spacing_m = 0.45;  // x spacing between neighbouring conductors (m), >= 4 radii
+  double conductor_yaw_rad = 0.0;  // heading of the line about the camera y axis (rad), |.| < 0.5
+  double conductor_pitch_rad =
+      -0.02;  // climb of the line about the camera x axis (rad, < 0 rises), |.| < 0.5
+  double conductor_radius_m = 0.0136;  // ACSR "Drake"-like 27.2 mm diameter
+  double conductor_sag_m =
+      1500.0;  // catenary parameter a = H/w (m); y(s) = a (cosh((s - s0)/a) - 1)
+  double conductor_lowest_point_m =
+      30.0;                              // arc position s0 of the lowest point of the catenary (m)
+  double conductor_length_m = 150.0;     // rendered length ahead of the camera (m)
+  int conductor_strands = 18;            // outer-layer strands of the helical texture
+  double conductor_lay_length_m = 0.30;  // helix pitch of the outer strands (m)
+
+  // Background.
+  bool towers = true;            // lattice towers carrying the line in the distance
+  double ground_depth_m = 12.0;  // terrain height below the camera (m)
+  double cloud_cover = 0.45;     // 0 = clear sky, 1 = overcast
+
+  // Lighting: sun direction in the left camera frame given by elevation above the horizon and
+  // azimuth from the optical axis towards +x.
+  double sun_elevation_deg = 40.0;  // 5..90
+  double sun_azimuth_deg = -35.0;   // -180..180
+  double ambient = 0.35;            // sky ambient relative to the sun (0..1)
+
+  // Also ray cast an ideal RECTIFIED pair (no distortion, exact rectified cameras, same sensor
+  // model) into PowerLineScene::rectified_left/right. Costs about as much as the raw pair.
+  bool render_rectified_pair = false;
+
+  void Check() const;
+};
+
+// Per-pixel class of the ground truth (rectified left image).
+enum class SurfaceClass : std::uint8_t {
+  kSky = 0,
+  kGround = 1,
+  kTower = 2,
+  kConductor = 3,
+  kObstacle = 4,
+};
+
+struct RenderedObstacle {
+  int id = 0;  // value of its pixels in PowerLineScene::obstacle_mask (1-based, order of the specs)
+  ObstacleType type = ObstacleType::kDamper;
+  int conductor = 0;
+  double distance_m =
+      0.0;  // true distance: min Z_rect over its surface (== the requested distance)
+  double visible_min_depth_m =
+      0.0;  // min ground-truth depth over its visible pixels; +inf if none visible
+  cv::Vec3d nearest_point_rect;  // the surface point realising distance_m (rectified left frame, m)
+  cv::Rect box;                  // bounding box of its visible pixels in the rectified left image
+  int visible_pixels = 0;        // number of rectified left pixels showing it
+};
+
+struct PowerLineScene {
+  cv::Mat left, right;            // raw (distorted, unrectified) images, CV_8UC3 BGR
+  StereoCalibration calibration;  // the true calibration
+  cv::Mat disparity;  // rectified left ground-truth disparity, CV_32FC1 px, +inf where nothing is
+                      // hit (sky)
+  cv::Mat depth;  // rectified left ground-truth depth Z_rect, CV_32FC1 m, +inf where nothing is hit
+  cv::Mat obstacle_mask;  // rectified left, CV_8UC1: obstacle id (RenderedObstacle::id), 0 = none
+  cv::Mat surface_class;  // rectified left, CV_8UC1: SurfaceClass of each pixel
+  std::vector<RenderedObstacle> obstacles;  // one per spec, in spec order
+  cv::Mat rectified_left, rectified_right;  // only with render_rectified_pair, CV_8UC3 BGR
+};
+
+// Renders the scene. Throws OptionError for invalid options, InputError when an obstacle cannot be
+// placed at its distance (e.g. the conductor does not reach that far).
+PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options);
+
+// Obstacles as JSON: [{"id", "type", "conductor", "distance_m", "visible_min_depth_m" (null if
+// hidden), "nearest_point_rect_m": [x,y,z], "box": [x,y,w,h], "visible_pixels"}], with a
+// "distance_definition" note at the top level: {"distance_definition": "...", "obstacles": [...]}.
+nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles);
+
+// Writes into `dir` (created if missing; files written atomically):
+//   left.png, right.png        raw pair (8-bit BGR)
+//   stereo.yml                 true calibration (OpenCV FileStorage)
+//   disparity_gt.pfm           rectified left GT disparity (px, +inf = none)
+//   depth_gt.pfm               rectified left GT depth Z (m, +inf = none)
+//   obstacle_mask.png          rectified left obstacle ids (8-bit, 0 = none)
+//   surface_class.png          rectified left SurfaceClass (8-bit)
+//   obstacles.json             ObstaclesToJson
+//   rectified_left.png, rectified_right.png   only if rendered
+void WritePowerLineScene(const std::filesystem::path& dir, const PowerLineScene& scene);
+
+// ----------------------------------------------------------------------------------------------------------
+// Calibration boards
+// ----------------------------------------------------------------------------------------------------------
+
+struct ChessboardOptions {
+  int cols = 9;             // inner corners along the board x axis (>= 2)
+  int rows = 6;             // inner corners along the board y axis (>= 2)
+  double square_m = 0.040;  // square side (m)
+  double border_squares =
+      1.0;  // white margin around the squares, in squares (>= 0.5 so detectors work)
+
+  void Check() const;
+  // Inner corners in the board frame (z = 0, metres), row-major (index r * cols + c) at (c, r) *
+  // square_m, as cv::findChessboardCorners orders them. The squares span [-1, cols] x [-1, rows]
+  // squares (the square at (-1, -1) is black) and the white border surrounds that.
+  std::vector<cv::Point3f> ObjectPoints() const;
+};
+
+struct CalibrationBoardOptions {
+  StereoRigOptions rig;
+  SensorOptions sensor{.supersampling =
+                           4};  // finer anti-aliasing: chessboard corners are sub-pixel targets
+  ChessboardOptions board;
+  std::uint64_t seed = 1;
+  int num_stereo_views = 15;  // boards fully visible in both cameras (>= 0)
+  int num_left_only =
+      0;  // boards fully visible in the left camera only (partly or not in the right)
+  int num_right_only = 0;        // boards fully visible in the right camera only
+  double min_distance_m = 0.45;  // range of board-centre depth (m)
+  double max_distance_m = 1.4;
+  double max_tilt_deg =
+      40.0;  // maximum angle between the board normal and the viewing direction (deg)
+  double margin_px =
+      8.0;  // every board corner (incl. border) at least this far inside a "visible" image
+
+  void Check() const;
+};
+
+struct BoardView {
+  cv::Mat left, right;            // raw images, CV_8UC3 BGR (background: a textured grey wall)
+  cv::Matx33d left_from_board_R;  // true pose: X_left = R * X_board + t
+  cv::Vec3d left_from_board_t;    // (m)
+  bool board_in_left = true;      // the whole board (with border) lies inside the left image
+  bool board_in_right = true;     // ... inside the right image
+  // True projections of ChessboardOptions::ObjectPoints() into each raw image (with distortion),
+  // same order.
+  std::vector<cv::Point2d> corners_left, corners_right;
+};
+
+struct CalibrationBoardSet {
+  StereoCalibration calibration;  // the true calibration
+  ChessboardOptions board;
+  std::vector<BoardView> views;  // stereo views first, then left-only, then right-only
+};
+
+CalibrationBoardSet RenderCalibrationBoards(const CalibrationBoardOptions& options);
+
+// Writes into `dir`: left_NN.png, right_NN.png (NN = 00, 01, ...), stereo.yml (true calibration)
+// and boards.json {"board": {cols, rows, square_m, border_squares}, "views": [{"left", "right",
+// "board_in_left", "board_in_right", "left_from_board_R" (row-major 9), "left_from_board_t"}]}.
+void WriteCalibrationBoards(const std::filesystem::path& dir, const CalibrationBoardSet& set);
+
+}  // namespace linesight::sim
