@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# The README's main command: installs every dependency, builds linesight and runs the main job.
+# Idempotent; run from anywhere inside a clone. Output goes to ./out (or $OUT).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+JOBS=${JOBS:-$(nproc)}
+OUT=${OUT:-out}
+
+bash scripts/install-deps.sh
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build build -j"$JOBS" --target linesight
+mkdir -p "$OUT"
+./build/apps/linesight eval stereo --data /usr/share/doc/opencv-doc/examples/data --methods sgbm,bm \
+  --plots "$OUT/plots" --json "$OUT/eval.json"

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The README's test command: installs every dependency, builds linesight with warnings as errors and runs the
+# whole test suite. With CI=true it also checks formatting and runs the suite under ASan+UBSan.
+# Idempotent; run from anywhere inside a clone.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$(pwd)
+JOBS=${JOBS:-$(nproc)}
+
+bash scripts/install-deps.sh
+
+if [ "${CI:-}" = "true" ]; then
+  echo "== format check (clang-format, then git diff --exit-code)"
+  git ls-files '*.cc' '*.h' | xargs clang-format -i
+  git diff --exit-code --stat || { echo "format check failed: run clang-format -i on the files above"; exit 1; }
+fi
+
+echo "== release build (warnings as errors)"
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DLINESIGHT_WERROR=ON -DLINESIGHT_STRICT=ON >/dev/null
+cmake --build build -j"$JOBS"
+
+echo "== tests"
+ctest --test-dir build --output-on-failure -j"$JOBS" --timeout 600
+
+if [ "${CI:-}" = "true" ]; then
+  echo "== ASan+UBSan build of the tests"
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
+    -DLINESIGHT_WERROR=ON -DLINESIGHT_STRICT=ON -DLINESIGHT_SANITIZE=ON -DLINESIGHT_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake --build build-asan -j"$JOBS"
+  echo "== tests under ASan+UBSan"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir build-asan --output-on-failure -j"$JOBS" --timeout 900 -LE slow
+fi
