@@ -22,7 +22,7 @@ void MatcherOptions::Check() const {
   CheckOption(threads >= 0, "MatcherOptions.threads", threads, "must be >= 0 (0 = all cores)");
 }
 
-std::vector<std::string> MatcherNames() { return {"bm", "sgbm"}; }
+std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls"}; }
 
 std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
                                              const MatcherOptions& options) {
@@ -33,6 +33,8 @@ std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
     matcher = CreateOpenCvBlockMatcher(options, params);
   } else if (method == "sgbm") {
     matcher = CreateOpenCvSgbm(options, params);
+  } else if (method == "sgbm-wls") {
+    matcher = CreateOpenCvSgbmWls(options, params);
   } else {
     throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
                                  fmt::join(MatcherNames(), ", ")));

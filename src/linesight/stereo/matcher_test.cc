@@ -97,7 +97,7 @@ TEST_P(OpenCvMatcherTest, DifferentSizesIsInputError) {
   EXPECT_THROW(matcher->Compute(cv::Mat(20, 30, CV_8UC1), cv::Mat(20, 31, CV_8UC1)), InputError);
 }
 
-INSTANTIATE_TEST_SUITE_P(Methods, OpenCvMatcherTest, ::testing::Values("bm", "sgbm"));
+INSTANTIATE_TEST_SUITE_P(Methods, OpenCvMatcherTest, ::testing::Values("bm", "sgbm", "sgbm-wls"));
 
 }  // namespace
 }  // namespace linesight

@@ -2,6 +2,7 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
+#include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include "linesight/core/error.h"
 
@@ -104,6 +105,7 @@ class OpenCvSgbm final : public StereoMatcher {
   }
 
   std::string Name() const override { return "sgbm"; }
+  const cv::Ptr<cv::StereoSGBM>& matcher() const { return sgbm_; }
 
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
@@ -136,7 +138,57 @@ class OpenCvSgbm final : public StereoMatcher {
   cv::Ptr<cv::StereoSGBM> sgbm_;
 };
 
+// SGBM followed by ximgproc's DisparityWLSFilter guided by the left image, with the right-view
+// matcher for the left-right confidence: what many OpenCV users pick for dense maps.
+class OpenCvSgbmWls final : public StereoMatcher {
+ public:
+  OpenCvSgbmWls(const MatcherOptions& options, MatcherParams& params)
+      : options_(options), sgbm_(options, params) {
+    lambda_ = params.GetDouble("lambda", 8000.0);
+    sigma_ = params.GetDouble("sigma", 1.5);
+    CheckOption(lambda_ >= 0, "sgbm-wls.lambda", lambda_, "must be >= 0");
+    CheckOption(sigma_ > 0, "sgbm-wls.sigma", sigma_, "must be > 0");
+    right_matcher_ = cv::ximgproc::createRightMatcher(sgbm_.matcher());
+    wls_ = cv::ximgproc::createDisparityWLSFilter(sgbm_.matcher());
+    wls_->setLambda(lambda_);
+    wls_->setSigmaColor(sigma_);
+  }
+
+  std::string Name() const override { return "sgbm-wls"; }
+
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
+    CheckPair(left, right);
+    if (options_.threads > 0) cv::setNumThreads(options_.threads);
+    const cv::Mat left_gray = ToGray8(left), right_gray = ToGray8(right);
+    cv::Mat left_fixed, right_fixed, filtered;
+    sgbm_.matcher()->compute(left_gray, right_gray, left_fixed);
+    right_matcher_->compute(right_gray, left_gray, right_fixed);
+    wls_->filter(left_fixed, left, filtered, right_fixed, cv::Rect(), right);
+    return FixedPointToFloatDisparity(filtered, options_.min_disparity, options_.num_disparities);
+  }
+
+  nlohmann::json Settings() const override {
+    nlohmann::json settings = sgbm_.Settings();
+    settings["method"] = "sgbm-wls";
+    settings["lambda"] = lambda_;
+    settings["sigma"] = sigma_;
+    return settings;
+  }
+
+ private:
+  MatcherOptions options_;
+  OpenCvSgbm sgbm_;
+  double lambda_, sigma_;
+  cv::Ptr<cv::StereoMatcher> right_matcher_;
+  cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls_;
+};
+
 }  // namespace
+
+std::unique_ptr<StereoMatcher> CreateOpenCvSgbmWls(const MatcherOptions& options,
+                                                   MatcherParams& params) {
+  return std::make_unique<OpenCvSgbmWls>(options, params);
+}
 
 std::unique_ptr<StereoMatcher> CreateOpenCvBlockMatcher(const MatcherOptions& options,
                                                         MatcherParams& params) {

@@ -21,4 +21,9 @@ std::unique_ptr<StereoMatcher> CreateOpenCvBlockMatcher(const MatcherOptions& op
 std::unique_ptr<StereoMatcher> CreateOpenCvSgbm(const MatcherOptions& options,
                                                 MatcherParams& params);
 
+// SGBM (same parameters as above) + ximgproc DisparityWLSFilter with the right-view matcher and
+// confidence. Extra parameters: lambda (default 8000), sigma (colour sigma, default 1.5).
+std::unique_ptr<StereoMatcher> CreateOpenCvSgbmWls(const MatcherOptions& options,
+                                                   MatcherParams& params);
+
 }  // namespace linesight
