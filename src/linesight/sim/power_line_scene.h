@@ -27,13 +27,15 @@
 // right_from_left: X_right = R * X_left + T.
 //
 // Obstacle distance (what ranging must reproduce): the distance from the left camera centre to the
-// obstacle's nearest surface measured along the RECTIFIED left optical axis, i.e. the minimum of
-// Z_rect over the obstacle's whole surface, computed analytically from its primitives. That nearest
-// point is never self-occluded (any point in front of it on the same ray would have a smaller Z);
-// it can be hidden by another object or lie outside the image at very short range, which is why
-// RenderedObstacle also reports `visible_min_depth_m`, the minimum of the ground-truth depth over
-// the obstacle's visible pixels. Obstacles are placed so that `distance_m` equals the requested
-// distance (to ~1e-9 m).
+// obstacle's nearest surface AS SEEN, measured along the RECTIFIED left optical axis, i.e. the
+// minimum of the ground-truth depth Z_rect over the obstacle's visible pixels (pixel centres of the
+// rectified left image, occlusion by the conductor or other obstacles and the image border taken
+// into account). Each obstacle is slid along its conductor until that minimum equals the requested
+// distance (to 1e-4 m; the achieved value is what `distance_m` reports). `surface_min_depth_m` is
+// the minimum of Z_rect over the obstacle's WHOLE surface (analytic); it is smaller than
+// `distance_m` only when the nearest part is hidden or outside the image, which happens at very
+// short range. Obstacles are designed with a camera-facing front (damper weight end caps, clamp
+// body face, insulator disc rims), so the nearest surface is a patch, not a single point.
 //
 // Everything is deterministic: the same options (including the seed) give identical bytes on every
 // run and any number of threads.
@@ -102,8 +104,8 @@ struct SensorOptions {
   double vignetting = 0.0;  // relative fall-off at the image corner: gain = 1 - v * (r/r_corner)^2
   double blur_sigma_px = 0.0;   // Gaussian optical blur of the raw images (px), 0 = none
   double noise_sigma_dn = 1.0;  // additive Gaussian read noise (DN, 8-bit scale), 0 = none
-  double shot_noise_electrons =
-      0;  // > 0 enables shot noise: full scale (255 DN) = this many electrons
+  // > 0 enables shot noise: full scale (255 DN) collects this many electrons; 0 = no shot noise.
+  double shot_noise_electrons = 0.0;
   // Seed of the sensor noise; unset = derived from the scene/board seed. Set it to take fresh noise
   // on the same scene (the noise-free image does not depend on it).
   std::optional<std::uint64_t> noise_seed;
@@ -116,10 +118,15 @@ struct SensorOptions {
 // ----------------------------------------------------------------------------------------------------------
 
 enum class ObstacleType {
-  kDamper,  // Stockbridge damper: clamp on the conductor, messenger cable, two dumbbell weights
-  kSuspensionClamp,  // suspension clamp: boat-shaped body around the conductor with a yoke on top
-  kInsulatorString,  // insulator string: stack of disc sheds hanging from a crossarm, with its
-                     // clamp
+  // Stockbridge damper ("counterweight"): clamp on the conductor, messenger cable below it and two
+  // dumbbell weights whose flat end caps face along the line.
+  kDamper,
+  // Suspension clamp: box-shaped body around the conductor, keeper with U-bolts, short hanger.
+  kSuspensionClamp,
+  // Insulator string: a suspension clamp hanging from a vertical stack of glass disc sheds that
+  // hangs
+  // from a crossarm (the crossarm counts as tower, not as the obstacle).
+  kInsulatorString,
 };
 
 // "damper", "clamp", "insulator".
@@ -142,32 +149,38 @@ std::vector<ObstacleSpec> ParseObstacleSpecs(std::string_view text);
 struct PowerLineSceneOptions {
   StereoRigOptions rig;
   SensorOptions sensor;
-  std::uint64_t seed =
-      1;  // scene variation: textures, clouds, towers, terrain; and the default noise seed
+  // Scene variation (textures, clouds, terrain) and the default noise seed.
+  std::uint64_t seed = 1;
 
   // Obstacles in the default scene: three types spread out along the line.
   std::vector<ObstacleSpec> obstacles{{ObstacleType::kDamper, 1.5, 0},
                                       {ObstacleType::kSuspensionClamp, 3.0, 0},
                                       {ObstacleType::kInsulatorString, 4.5, 0}};
 
-  // Conductors. Conductor 0 passes the left camera centre at this lateral/vertical offset (left
-  // frame, m) at z = 0 and runs away from the camera along +z (turned by yaw/pitch); the others are
-  // parallel to it, spaced along x.
-  int num_conductors = 2;               // 1..4
-  double conductor_offset_x_m = -0.06;  // x of conductor 0 at z = 0 (m)
-  double conductor_offset_y_m =
-      0.09;                           // y of conductor 0 at z = 0 (m, +y is down: below the camera)
-  double conductor_spacing_m = 0.45;  // x spacing between neighbouring conductors (m), >= 4 radii
-  double conductor_yaw_rad = 0.0;  // heading of the line about the camera y axis (rad), |.| < 0.5
-  double conductor_pitch_rad =
-      -0.02;  // climb of the line about the camera x axis (rad, < 0 rises), |.| < 0.5
-  double conductor_radius_m = 0.0136;  // ACSR "Drake"-like 27.2 mm diameter
-  double conductor_sag_m =
-      1500.0;  // catenary parameter a = H/w (m); y(s) = a (cosh((s - s0)/a) - 1)
-  double conductor_lowest_point_m =
-      30.0;                              // arc position s0 of the lowest point of the catenary (m)
-  double conductor_length_m = 150.0;     // rendered length ahead of the camera (m)
-  int conductor_strands = 18;            // outer-layer strands of the helical texture
+  // Conductors. The robot rides below conductor 0, so the camera sees it passing just above and
+  // beside the lens: at z = 0 its axis is at (conductor_offset_x_m, conductor_offset_y_m) in the
+  // left frame. It runs away from the camera along +z (turned by yaw and pitch) and sags as a
+  // catenary with its lowest point half-way to the next tower, `span_ahead_m` ahead, where it ends.
+  // The other conductors are parallel to it, spaced along x.
+  int num_conductors = 2;  // 1..4
+  // x of conductor 0's axis at z = 0 (m).
+  double conductor_offset_x_m = -0.05;
+  // y of conductor 0's axis at z = 0 (m; +y is down, so < 0 is above the camera).
+  double conductor_offset_y_m = -0.08;
+  // x spacing between neighbouring conductors (m), >= 4 conductor radii.
+  double conductor_spacing_m = 0.45;
+  // Heading of the line: rotation about the camera y axis (rad, > 0 turns towards +x), |.| <= 0.5.
+  double conductor_yaw_rad = 0.0;
+  // Climb of the line at the camera: rotation about the camera x axis (rad, > 0 rises), |.| <= 0.5.
+  double conductor_pitch_rad = 0.0;
+  // Conductor radius (m); ACSR "Drake" is 28.1 mm across.
+  double conductor_radius_m = 0.014;
+  // Catenary parameter a = H / w (m): horizontal tension over weight per metre; the sag at mid-span
+  // is a (cosh(span / 2a) - 1). Smaller = more sag.
+  double sag_parameter_m = 400.0;
+  // Distance along the line to the next tower, where the conductors end (m), 10..1000.
+  double span_ahead_m = 80.0;
+  int conductor_strands = 18;            // outer-layer strands of the helical texture, 6..60
   double conductor_lay_length_m = 0.30;  // helix pitch of the outer strands (m)
 
   // Background.
@@ -201,21 +214,22 @@ struct RenderedObstacle {
   int id = 0;  // value of its pixels in PowerLineScene::obstacle_mask (1-based, order of the specs)
   ObstacleType type = ObstacleType::kDamper;
   int conductor = 0;
-  double distance_m =
-      0.0;  // true distance: min Z_rect over its surface (== the requested distance)
-  double visible_min_depth_m =
-      0.0;  // min ground-truth depth over its visible pixels; +inf if none visible
-  cv::Vec3d nearest_point_rect;  // the surface point realising distance_m (rectified left frame, m)
-  cv::Rect box;                  // bounding box of its visible pixels in the rectified left image
-  int visible_pixels = 0;        // number of rectified left pixels showing it
+  double requested_distance_m = 0.0;  // ObstacleSpec::distance_m
+  // TRUE distance (m): min ground-truth depth over its visible pixels (see the top of the file).
+  double distance_m = 0.0;
+  double surface_min_depth_m = 0.0;  // min Z_rect over its whole surface, visible or not (analytic)
+  cv::Point nearest_pixel;           // rectified left pixel realising distance_m
+  cv::Rect box;            // bounding box of its visible pixels in the rectified left image
+  int visible_pixels = 0;  // number of rectified left pixels showing it
 };
 
 struct PowerLineScene {
   cv::Mat left, right;            // raw (distorted, unrectified) images, CV_8UC3 BGR
   StereoCalibration calibration;  // the true calibration
-  cv::Mat disparity;  // rectified left ground-truth disparity, CV_32FC1 px, +inf where nothing is
-                      // hit (sky)
-  cv::Mat depth;  // rectified left ground-truth depth Z_rect, CV_32FC1 m, +inf where nothing is hit
+  // Rectified left ground truth, +inf where nothing is hit (sky): disparity (CV_32FC1, px) and
+  // depth Z_rect (CV_32FC1, m).
+  cv::Mat disparity;
+  cv::Mat depth;
   cv::Mat obstacle_mask;  // rectified left, CV_8UC1: obstacle id (RenderedObstacle::id), 0 = none
   cv::Mat surface_class;  // rectified left, CV_8UC1: SurfaceClass of each pixel
   std::vector<RenderedObstacle> obstacles;  // one per spec, in spec order
@@ -223,12 +237,12 @@ struct PowerLineScene {
 };
 
 // Renders the scene. Throws OptionError for invalid options, InputError when an obstacle cannot be
-// placed at its distance (e.g. the conductor does not reach that far).
+// placed at its distance (not visible in the rectified left image there, or beyond the span).
 PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options);
 
-// Obstacles as JSON: [{"id", "type", "conductor", "distance_m", "visible_min_depth_m" (null if
-// hidden), "nearest_point_rect_m": [x,y,z], "box": [x,y,w,h], "visible_pixels"}], with a
-// "distance_definition" note at the top level: {"distance_definition": "...", "obstacles": [...]}.
+// Obstacles as JSON: {"distance_definition": "<the definition above>", "obstacles": [{"id", "type",
+// "conductor", "requested_distance_m", "distance_m", "surface_min_depth_m", "nearest_pixel": [u,
+// v], "box": [x, y, w, h], "visible_pixels"}]}.
 nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles);
 
 // Writes into `dir` (created if missing; files written atomically):
