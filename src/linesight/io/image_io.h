@@ -10,17 +10,21 @@ namespace linesight {
 enum class ImageColor {
   kGray,       // 8-bit single channel; palette PNGs are mapped through their palette to grey values
   kColor,      // 8-bit BGR
-  kUnchanged,  // as stored (8/16-bit, 1/3/4 channels), except that palette images become grey values
+  kUnchanged,  // as stored (8/16-bit, 1/3/4 channels), except that palette images become grey
+               // values
 };
 
-// Reads an image. Throws InputError naming the file when it is missing, empty or not a decodable image.
+// Reads an image. Throws InputError naming the file when it is missing, empty or not a decodable
+// image.
 cv::Mat ReadImage(const std::filesystem::path& path, ImageColor color);
 
-// Writes an image (format from the extension) atomically. Throws InputError naming the file on failure.
+// Writes an image (format from the extension) atomically. Throws InputError naming the file on
+// failure.
 void WriteImage(const std::filesystem::path& path, const cv::Mat& image);
 
-// Throws InputError unless both images have the same size ("left.png is 640x480 but right.png is 320x240").
-void CheckSameSize(const cv::Mat& left, const std::filesystem::path& left_path, const cv::Mat& right,
-                   const std::filesystem::path& right_path);
+// Throws InputError unless both images have the same size ("left.png is 640x480 but right.png is
+// 320x240").
+void CheckSameSize(const cv::Mat& left, const std::filesystem::path& left_path,
+                   const cv::Mat& right, const std::filesystem::path& right_path);
 
 }  // namespace linesight

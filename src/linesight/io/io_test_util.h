@@ -20,7 +20,8 @@ class TempDirTest : public ::testing::Test {
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     dir_ = std::filesystem::temp_directory_path() /
-           ("linesight_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
+           ("linesight_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" +
+            info->name());
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
@@ -28,20 +29,24 @@ class TempDirTest : public ::testing::Test {
   // Names of the files in the folder (to check that failed writes leave nothing behind).
   std::vector<std::string> Files() const {
     std::vector<std::string> names;
-    for (const auto& entry : std::filesystem::directory_iterator(dir_)) names.push_back(entry.path().filename());
+    for (const auto& entry : std::filesystem::directory_iterator(dir_))
+      names.push_back(entry.path().filename());
     return names;
   }
   std::filesystem::path dir_;
 };
 
-// Runs `body`, expects an InputError whose message contains every one of `parts`; returns the message.
-inline std::string ExpectInputError(const std::function<void()>& body, std::initializer_list<std::string> parts) {
+// Runs `body`, expects an InputError whose message contains every one of `parts`; returns the
+// message.
+inline std::string ExpectInputError(const std::function<void()>& body,
+                                    std::initializer_list<std::string> parts) {
   try {
     body();
   } catch (const InputError& e) {
     const std::string message = e.what();
     for (const std::string& part : parts) {
-      EXPECT_NE(message.find(part), std::string::npos) << "message \"" << message << "\" lacks \"" << part << "\"";
+      EXPECT_NE(message.find(part), std::string::npos)
+          << "message \"" << message << "\" lacks \"" << part << "\"";
     }
     return message;
   }

@@ -1,0 +1,108 @@
+#include "linesight/io/image_io.h"
+
+#include <cstdint>
+#include <string>
+#include <system_error>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "linesight/core/atomic_file.h"
+#include "linesight/core/error.h"
+
+namespace linesight {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kExpectedImage =
+    "expected an image file (PNG, JPEG, TIFF, BMP, PNM, WebP, ...)";
+
+// PNG colour type 3 = indexed colour. The IHDR chunk is always first: 8-byte signature, 4-byte
+// length, "IHDR", width (4), height (4), bit depth (1), colour type (1) -> colour type at byte
+// offset 25.
+bool IsPalettePng(const std::string& bytes) {
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (bytes.size() < 26) return false;
+  for (int i = 0; i < 8; ++i) {
+    if (static_cast<unsigned char>(bytes[i]) != kSignature[i]) return false;
+  }
+  return bytes.compare(12, 4, "IHDR") == 0 && static_cast<unsigned char>(bytes[25]) == 3;
+}
+
+int ImreadFlags(ImageColor color, bool palette) {
+  switch (color) {
+    case ImageColor::kGray:
+      return cv::IMREAD_GRAYSCALE;
+    case ImageColor::kColor:
+      return cv::IMREAD_COLOR;
+    case ImageColor::kUnchanged:
+      // IMREAD_UNCHANGED expands a palette to BGR(A); IMREAD_GRAYSCALE maps it through the palette
+      // to grey values (exact for grey palettes such as Middlebury's ground truths and masks).
+      return palette ? cv::IMREAD_GRAYSCALE : cv::IMREAD_UNCHANGED;
+  }
+  return cv::IMREAD_UNCHANGED;
+}
+
+}  // namespace
+
+cv::Mat ReadImage(const fs::path& path, ImageColor color) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    throw InputError(
+        fmt::format("{}: cannot read image: no such file ({})", path.string(), kExpectedImage));
+  }
+  if (fs::is_directory(path, ec)) {
+    throw InputError(
+        fmt::format("{}: cannot read image: this is a folder ({})", path.string(), kExpectedImage));
+  }
+  const std::string bytes = ReadTextFile(path);
+  if (bytes.empty()) {
+    throw InputError(fmt::format("{}: cannot read image: the file is empty ({})", path.string(),
+                                 kExpectedImage));
+  }
+  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
+  cv::Mat image;
+  try {
+    image = cv::imdecode(buffer, ImreadFlags(color, IsPalettePng(bytes)));
+  } catch (const cv::Exception& e) {
+    throw InputError(
+        fmt::format("{}: cannot decode image: {} ({})", path.string(), e.err, kExpectedImage));
+  }
+  if (image.empty()) {
+    throw InputError(fmt::format("{}: cannot decode image: unknown format or corrupt data ({})",
+                                 path.string(), kExpectedImage));
+  }
+  return image;
+}
+
+void WriteImage(const fs::path& path, const cv::Mat& image) {
+  if (image.empty())
+    throw InputError(fmt::format("{}: cannot write an empty image", path.string()));
+  WriteFileAtomic(path, [&](const fs::path& tmp) {
+    bool ok = false;
+    try {
+      ok = cv::imwrite(tmp.string(), image);
+    } catch (const cv::Exception& e) {
+      throw InputError(fmt::format("{}: cannot write image ({}x{}, {} channel(s), depth {}): {}",
+                                   path.string(), image.cols, image.rows, image.channels(),
+                                   image.depth(), e.err));
+    }
+    if (!ok) {
+      throw InputError(
+          fmt::format("{}: cannot write image (unsupported extension '{}' or write failed)",
+                      path.string(), path.extension().string()));
+    }
+  });
+}
+
+void CheckSameSize(const cv::Mat& left, const fs::path& left_path, const cv::Mat& right,
+                   const fs::path& right_path) {
+  if (left.size() != right.size()) {
+    throw InputError(fmt::format(
+        "{} is {}x{} but {} is {}x{}: the two images must have the same size", left_path.string(),
+        left.cols, left.rows, right_path.string(), right.cols, right.rows));
+  }
+}
+
+}  // namespace linesight
