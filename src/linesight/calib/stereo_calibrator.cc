@@ -1,0 +1,509 @@
+#include "linesight/calib/stereo_calibrator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <ceres/ceres.h>
+#include <Eigen/Dense>
+#include <opencv2/calib3d.hpp>
+
+#include "linesight/calib/calib_costs.h"
+#include "linesight/core/error.h"
+
+namespace linesight::calib {
+namespace {
+
+using detail::ReconstructionDistanceResidual;
+using detail::ReconstructionPointResidual;
+using detail::ReprojectionResidual;
+using detail::StereoReprojectionResidual;
+
+ceres::Solver::Options SolverOptions(const StereoCalibrationOptions& options) {
+  ceres::Solver::Options solver;
+  solver.linear_solver_type = ceres::DENSE_SCHUR;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.gradient_tolerance = 1e-14;
+  solver.parameter_tolerance = 1e-12;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  return solver;
+}
+
+void HoldFixedIntrinsics(ceres::Problem* problem, double* intrinsics,
+                         const DistortionModel& model) {
+  const std::vector<int> fixed = model.FixedIndices();
+  if (!fixed.empty())
+    problem->SetManifold(intrinsics, new ceres::SubsetManifold(kNumIntrinsics, fixed));
+}
+
+int CountViews(const std::vector<ViewObservations>& views) {
+  return static_cast<int>(
+      std::count_if(views.begin(), views.end(), [](auto& v) { return !v.empty(); }));
+}
+
+struct MonoEstimate {
+  CameraIntrinsics intrinsics;
+  std::vector<std::optional<Pose>> poses;
+};
+
+// Closed form + degeneracy checks for one camera; the LM refinement is separate.
+MonoEstimate InitializeMono(const BoardGeometry& board, const std::vector<ViewObservations>& views,
+                            cv::Size image_size, const std::string& name,
+                            const StereoCalibrationOptions& options) {
+  std::vector<Eigen::Matrix3d> homographies;
+  std::vector<size_t> view_of_homography;
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (views[v].ids.size() < 4) continue;
+    std::vector<Eigen::Vector2d> board_xy;
+    for (int id : views[v].ids) board_xy.push_back(board.points[id].head<2>());
+    homographies.push_back(EstimateHomography(board_xy, views[v].pixels));
+    view_of_homography.push_back(v);
+  }
+  const ClosedFormIntrinsics closed = IntrinsicsFromHomographies(homographies, image_size, name);
+  MonoEstimate out;
+  out.intrinsics.params[kFx] = closed.camera_matrix(0, 0);
+  out.intrinsics.params[kFy] = closed.camera_matrix(1, 1);
+  out.intrinsics.params[kCx] = closed.camera_matrix(0, 2);
+  out.intrinsics.params[kCy] = closed.camera_matrix(1, 2);
+  out.poses.assign(views.size(), std::nullopt);
+  std::vector<Pose> poses;
+  for (size_t h = 0; h < homographies.size(); ++h) {
+    const Pose pose = PoseFromHomography(closed.camera_matrix, homographies[h]);
+    out.poses[view_of_homography[h]] = pose;
+    poses.push_back(pose);
+  }
+  const double spread = MaxBoardNormalAngleDeg(poses);
+  if (spread < options.min_normal_angle_deg) {
+    throw InputError(
+        fmt::format("{}: degenerate board poses: the normals of all {} boards lie within {:.2f} "
+                    "deg of each other "
+                    "(need > {} deg); tilt the board differently between images",
+                    name, poses.size(), spread, options.min_normal_angle_deg));
+  }
+  return out;
+}
+
+void RefineMono(const BoardGeometry& board, const std::vector<ViewObservations>& views,
+                const StereoCalibrationOptions& options, MonoEstimate* estimate) {
+  ceres::Problem problem;
+  double* intrinsics = estimate->intrinsics.params.data();
+  for (size_t v = 0; v < views.size(); ++v) {
+    if (!estimate->poses[v]) continue;
+    for (size_t k = 0; k < views[v].ids.size(); ++k) {
+      problem.AddResidualBlock(
+          ReprojectionResidual::Create(views[v].pixels[k], board.points[views[v].ids[k]]), nullptr,
+          intrinsics, estimate->poses[v]->params.data());
+    }
+  }
+  HoldFixedIntrinsics(&problem, intrinsics, options.distortion);
+  ceres::Solver::Summary summary;
+  ceres::Solve(SolverOptions(options), &problem, &summary);
+}
+
+Pose MeanRightFromLeft(const std::vector<Pose>& per_view) {
+  Eigen::Matrix3d rotation_sum = Eigen::Matrix3d::Zero();
+  std::vector<double> tx, ty, tz;
+  for (const Pose& p : per_view) {
+    rotation_sum += p.Rotation();
+    tx.push_back(p.params[3]);
+    ty.push_back(p.params[4]);
+    tz.push_back(p.params[5]);
+  }
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  };
+  return Pose::FromRotationTranslation(NearestRotation(rotation_sum),
+                                       Eigen::Vector3d(median(tx), median(ty), median(tz)));
+}
+
+// The joint refinement of zhang and recon (see the header for the objective).
+void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& options,
+                 bool recon_terms, StereoCalibrationResult* result) {
+  ceres::Problem problem;
+  double* left_intrinsics = result->left.params.data();
+  double* right_intrinsics = result->right.params.data();
+  double* right_from_left = result->right_from_left.params.data();
+  problem.AddParameterBlock(left_intrinsics, kNumIntrinsics);
+  problem.AddParameterBlock(right_intrinsics, kNumIntrinsics);
+  problem.AddParameterBlock(right_from_left, kPoseSize);
+  const BoardGeometry& board = obs.board;
+  const double f0 = result->left.fx();
+  const double baseline0 = result->right_from_left.Translation().norm();
+  for (size_t v = 0; v < obs.size(); ++v) {
+    const ViewObservations& left = obs.left[v];
+    const ViewObservations& right = obs.right[v];
+    if (!left.empty() && result->left_from_board[v]) {
+      double* pose = result->left_from_board[v]->params.data();
+      for (size_t k = 0; k < left.ids.size(); ++k) {
+        problem.AddResidualBlock(
+            ReprojectionResidual::Create(left.pixels[k], board.points[left.ids[k]]), nullptr,
+            left_intrinsics, pose);
+      }
+      if (!right.empty()) {
+        for (size_t k = 0; k < right.ids.size(); ++k) {
+          problem.AddResidualBlock(
+              StereoReprojectionResidual::Create(right.pixels[k], board.points[right.ids[k]]),
+              nullptr, right_intrinsics, pose, right_from_left);
+        }
+      }
+    } else if (!right.empty() && result->right_only_from_board[v]) {
+      double* pose = result->right_only_from_board[v]->params.data();
+      for (size_t k = 0; k < right.ids.size(); ++k) {
+        problem.AddResidualBlock(
+            ReprojectionResidual::Create(right.pixels[k], board.points[right.ids[k]]), nullptr,
+            right_intrinsics, pose);
+      }
+    }
+    if (!recon_terms || !obs.IsPair(v) || !result->left_from_board[v]) continue;
+    // Corners seen by both cameras of this pair view.
+    std::map<int, Eigen::Vector2d> right_by_id;
+    for (size_t k = 0; k < right.ids.size(); ++k) right_by_id[right.ids[k]] = right.pixels[k];
+    std::map<int, std::pair<Eigen::Vector2d, Eigen::Vector2d>> common;
+    for (size_t k = 0; k < left.ids.size(); ++k) {
+      const auto it = right_by_id.find(left.ids[k]);
+      if (it != right_by_id.end()) common[left.ids[k]] = {left.pixels[k], it->second};
+    }
+    double* pose = result->left_from_board[v]->params.data();
+    const Pose& left_from_board = *result->left_from_board[v];
+    if (options.recon_point_weight > 0) {
+      for (const auto& [id, pixels] : common) {
+        const double depth = std::max(left_from_board.Apply(board.points[id]).z(), 1e-6);
+        const double w = options.recon_point_weight;
+        const Eigen::Vector3d scale(w * f0 / depth, w * f0 / depth,
+                                    w * f0 * baseline0 / (depth * depth));
+        problem.AddResidualBlock(ReconstructionPointResidual::Create(pixels.first, pixels.second,
+                                                                     board.points[id], scale),
+                                 nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
+      }
+    }
+    if (options.recon_distance_weight > 0) {
+      for (const AdjacentPair& pair : board.adjacent) {
+        const auto a = common.find(pair.a);
+        const auto b = common.find(pair.b);
+        if (a == common.end() || b == common.end()) continue;
+        const double depth = std::max(0.5 * (left_from_board.Apply(board.points[pair.a]).z() +
+                                             left_from_board.Apply(board.points[pair.b]).z()),
+                                      1e-6);
+        problem.AddResidualBlock(
+            ReconstructionDistanceResidual::Create(
+                a->second.first, a->second.second, b->second.first, b->second.second,
+                pair.distance_m, options.recon_distance_weight * f0 / depth),
+            nullptr, left_intrinsics, right_intrinsics, right_from_left);
+      }
+    }
+  }
+  HoldFixedIntrinsics(&problem, left_intrinsics, options.distortion);
+  HoldFixedIntrinsics(&problem, right_intrinsics, options.distortion);
+  ceres::Solver::Summary summary;
+  ceres::Solve(SolverOptions(options), &problem, &summary);
+}
+
+// Refines one board pose with everything else fixed (used after OpenCV's calibration).
+void RefinePoseOnly(const BoardGeometry& board, const ViewObservations* view_a,
+                    CameraIntrinsics intrinsics_a, const ViewObservations* view_b,
+                    CameraIntrinsics intrinsics_b, Pose b_from_a,
+                    const StereoCalibrationOptions& options, Pose* pose) {
+  ceres::Problem problem;
+  for (size_t k = 0; k < view_a->ids.size(); ++k) {
+    problem.AddResidualBlock(
+        ReprojectionResidual::Create(view_a->pixels[k], board.points[view_a->ids[k]]), nullptr,
+        intrinsics_a.params.data(), pose->params.data());
+  }
+  if (view_b != nullptr) {
+    for (size_t k = 0; k < view_b->ids.size(); ++k) {
+      problem.AddResidualBlock(
+          StereoReprojectionResidual::Create(view_b->pixels[k], board.points[view_b->ids[k]]),
+          nullptr, intrinsics_b.params.data(), pose->params.data(), b_from_a.params.data());
+    }
+    problem.SetParameterBlockConstant(intrinsics_b.params.data());
+    problem.SetParameterBlockConstant(b_from_a.params.data());
+  }
+  problem.SetParameterBlockConstant(intrinsics_a.params.data());
+  ceres::Solver::Options solver = SolverOptions(options);
+  solver.linear_solver_type = ceres::DENSE_QR;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+}
+
+std::vector<cv::Point3f> ObjectPoints(const BoardGeometry& board, const std::vector<int>& ids) {
+  std::vector<cv::Point3f> out;
+  for (int id : ids) {
+    const Eigen::Vector3d& p = board.points[id];
+    out.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                     static_cast<float>(p.z()));
+  }
+  return out;
+}
+
+std::vector<cv::Point2f> ImagePoints(const std::vector<Eigen::Vector2d>& pixels) {
+  std::vector<cv::Point2f> out;
+  for (const auto& p : pixels)
+    out.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+  return out;
+}
+
+Pose SolvePnP(const BoardGeometry& board, const ViewObservations& view,
+              const CameraIntrinsics& camera, int distortion_count) {
+  cv::Mat rvec, tvec;
+  cv::solvePnP(ObjectPoints(board, view.ids), ImagePoints(view.pixels), camera.CameraMatrix(),
+               camera.Distortion(distortion_count), rvec, tvec);
+  return Pose::FromOpenCV(rvec, tvec);
+}
+
+void CalibrateOpenCV(const StereoObservations& obs, const StereoCalibrationOptions& options,
+                     StereoCalibrationResult* result) {
+  const int flags = options.distortion.OpenCVFlags();
+  const cv::TermCriteria criteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
+                                  options.max_iterations, 1e-12);
+  const auto mono = [&](const std::vector<ViewObservations>& views) {
+    std::vector<std::vector<cv::Point3f>> object;
+    std::vector<std::vector<cv::Point2f>> image;
+    for (const ViewObservations& v : views) {
+      if (v.empty()) continue;
+      object.push_back(ObjectPoints(obs.board, v.ids));
+      image.push_back(ImagePoints(v.pixels));
+    }
+    cv::Mat k, d;
+    std::vector<cv::Mat> rvecs, tvecs;
+    cv::calibrateCamera(object, image, obs.image_size, k, d, rvecs, tvecs, flags, criteria);
+    return CameraIntrinsics::FromOpenCV(k, d);
+  };
+  CameraIntrinsics left = mono(obs.left);
+  CameraIntrinsics right = mono(obs.right);
+  // Stereo on the corners both cameras saw.
+  std::vector<std::vector<cv::Point3f>> object;
+  std::vector<std::vector<cv::Point2f>> left_image, right_image;
+  for (size_t v = 0; v < obs.size(); ++v) {
+    if (!obs.IsPair(v)) continue;
+    std::map<int, Eigen::Vector2d> right_by_id;
+    for (size_t k = 0; k < obs.right[v].ids.size(); ++k)
+      right_by_id[obs.right[v].ids[k]] = obs.right[v].pixels[k];
+    std::vector<int> ids;
+    std::vector<Eigen::Vector2d> lp, rp;
+    for (size_t k = 0; k < obs.left[v].ids.size(); ++k) {
+      const auto it = right_by_id.find(obs.left[v].ids[k]);
+      if (it == right_by_id.end()) continue;
+      ids.push_back(obs.left[v].ids[k]);
+      lp.push_back(obs.left[v].pixels[k]);
+      rp.push_back(it->second);
+    }
+    if (ids.size() < 4) continue;
+    object.push_back(ObjectPoints(obs.board, ids));
+    left_image.push_back(ImagePoints(lp));
+    right_image.push_back(ImagePoints(rp));
+  }
+  const int count = options.distortion.OpenCVCount();
+  cv::Mat k1 = left.CameraMatrix(), d1 = left.Distortion(count);
+  cv::Mat k2 = right.CameraMatrix(), d2 = right.Distortion(count);
+  cv::Mat r, t, e, f;
+  result->method_reported_rms =
+      cv::stereoCalibrate(object, left_image, right_image, k1, d1, k2, d2, obs.image_size, r, t, e,
+                          f, flags | cv::CALIB_USE_INTRINSIC_GUESS, criteria);
+  result->left = CameraIntrinsics::FromOpenCV(k1, d1);
+  result->right = CameraIntrinsics::FromOpenCV(k2, d2);
+  result->right_from_left = Pose::FromOpenCV(r, t);
+  for (size_t v = 0; v < obs.size(); ++v) {
+    if (!obs.left[v].empty()) {
+      Pose pose = SolvePnP(obs.board, obs.left[v], result->left, count);
+      RefinePoseOnly(obs.board, &obs.left[v], result->left, obs.IsPair(v) ? &obs.right[v] : nullptr,
+                     result->right, result->right_from_left, options, &pose);
+      result->left_from_board[v] = pose;
+    } else if (!obs.right[v].empty()) {
+      Pose pose = SolvePnP(obs.board, obs.right[v], result->right, count);
+      RefinePoseOnly(obs.board, &obs.right[v], result->right, nullptr, result->right, Pose(),
+                     options, &pose);
+      result->right_only_from_board[v] = pose;
+    }
+  }
+}
+
+}  // namespace
+
+std::string MethodName(CalibrationMethod method) {
+  switch (method) {
+    case CalibrationMethod::kZhang:
+      return "zhang";
+    case CalibrationMethod::kRecon:
+      return "recon";
+    case CalibrationMethod::kOpenCV:
+      return "opencv";
+  }
+  return "?";
+}
+
+CalibrationMethod ParseMethod(const std::string& name) {
+  if (name == "zhang") return CalibrationMethod::kZhang;
+  if (name == "recon") return CalibrationMethod::kRecon;
+  if (name == "opencv") return CalibrationMethod::kOpenCV;
+  throw UsageError(
+      fmt::format("unknown calibration method '{}' (expected zhang, recon or opencv)", name));
+}
+
+StereoObservations ObservationsFromDetections(const StereoDetections& detections,
+                                              const BoardGeometry& board) {
+  StereoObservations obs;
+  obs.board = board;
+  obs.image_size = detections.image_size;
+  const auto convert = [](const Detection& d) {
+    ViewObservations v;
+    if (!d.found) return v;
+    v.ids = d.ids;
+    for (const cv::Point2d& p : d.pixels) v.pixels.emplace_back(p.x, p.y);
+    return v;
+  };
+  for (const PairDetection& pair : detections.pairs) {
+    obs.left.push_back(convert(pair.left));
+    obs.right.push_back(convert(pair.right));
+  }
+  return obs;
+}
+
+std::vector<int> DistortionModel::FixedIndices() const {
+  std::vector<int> fixed;
+  if (zero_tangential) {
+    fixed.push_back(kP1);
+    fixed.push_back(kP2);
+  }
+  if (fix_k3) fixed.push_back(kK3);
+  if (!rational) {
+    fixed.push_back(kK4);
+    fixed.push_back(kK5);
+    fixed.push_back(kK6);
+  }
+  return fixed;
+}
+
+int DistortionModel::OpenCVFlags() const {
+  int flags = 0;
+  if (rational) flags |= cv::CALIB_RATIONAL_MODEL;
+  if (fix_k3) flags |= cv::CALIB_FIX_K3;
+  if (zero_tangential) flags |= cv::CALIB_ZERO_TANGENT_DIST;
+  return flags;
+}
+
+void StereoCalibrationOptions::Check() const {
+  CheckOption(min_views >= 3, "StereoCalibrationOptions.min_views", min_views, "must be >= 3");
+  CheckOption(min_normal_angle_deg >= 0 && min_normal_angle_deg < 90,
+              "StereoCalibrationOptions.min_normal_angle_deg", min_normal_angle_deg,
+              "must be in [0, 90)");
+  CheckOption(max_iterations >= 1, "StereoCalibrationOptions.max_iterations", max_iterations,
+              "must be >= 1");
+  CheckOption(function_tolerance > 0 && function_tolerance < 1,
+              "StereoCalibrationOptions.function_tolerance", function_tolerance,
+              "must be in (0, 1)");
+  CheckOption(recon_point_weight >= 0 && std::isfinite(recon_point_weight),
+              "StereoCalibrationOptions.recon_point_weight", recon_point_weight,
+              "must be finite and >= 0");
+  CheckOption(recon_distance_weight >= 0 && std::isfinite(recon_distance_weight),
+              "StereoCalibrationOptions.recon_distance_weight", recon_distance_weight,
+              "must be finite and >= 0");
+}
+
+StereoCalibrationResult CalibrateStereo(const StereoObservations& obs,
+                                        const StereoCalibrationOptions& options) {
+  options.Check();
+  LS_CHECK(obs.left.size() == obs.right.size());
+  const int left_views = CountViews(obs.left);
+  const int right_views = CountViews(obs.right);
+  int pair_views = 0;
+  for (size_t v = 0; v < obs.size(); ++v) pair_views += obs.IsPair(v) ? 1 : 0;
+  if (left_views == 0 && right_views == 0) {
+    throw InputError(
+        fmt::format("no calibration board found in any of the {} image pairs", obs.size()));
+  }
+  if (left_views < options.min_views || right_views < options.min_views ||
+      pair_views < options.min_views) {
+    throw InputError(
+        fmt::format("too few views: the board was found in {} left, {} right and {} pair images; "
+                    "need at least {} of each",
+                    left_views, right_views, pair_views, options.min_views));
+  }
+  for (size_t v = 0; v < obs.size(); ++v) {
+    for (const auto* views : {&obs.left, &obs.right}) {
+      const ViewObservations& view = (*views)[v];
+      if (!view.empty() && view.ids.size() < 4) {
+        throw InputError(
+            fmt::format("view {} has only {} corners (need >= 4)", v, view.ids.size()));
+      }
+    }
+  }
+  // Degeneracy checks and the closed form for every method, so that bad input fails the same way.
+  MonoEstimate left = InitializeMono(obs.board, obs.left, obs.image_size, "left camera", options);
+  MonoEstimate right =
+      InitializeMono(obs.board, obs.right, obs.image_size, "right camera", options);
+
+  StereoCalibrationResult result;
+  result.method = options.method;
+  result.distortion = options.distortion;
+  result.left_from_board.assign(obs.size(), std::nullopt);
+  result.right_only_from_board.assign(obs.size(), std::nullopt);
+  if (options.method == CalibrationMethod::kOpenCV) {
+    CalibrateOpenCV(obs, options, &result);
+    return result;
+  }
+  RefineMono(obs.board, obs.left, options, &left);
+  RefineMono(obs.board, obs.right, options, &right);
+  result.left = left.intrinsics;
+  result.right = right.intrinsics;
+  if (options.method == CalibrationMethod::kZhang) {
+    std::vector<Pose> per_view;
+    for (size_t v = 0; v < obs.size(); ++v) {
+      if (obs.IsPair(v)) per_view.push_back(*right.poses[v] * left.poses[v]->Inverse());
+    }
+    result.right_from_left = MeanRightFromLeft(per_view);
+  } else {
+    std::vector<Eigen::Vector3d> in_left, in_right;
+    for (size_t v = 0; v < obs.size(); ++v) {
+      if (!obs.IsPair(v)) continue;
+      for (const Eigen::Vector3d& p : obs.board.points) {
+        in_left.push_back(left.poses[v]->Apply(p));
+        in_right.push_back(right.poses[v]->Apply(p));
+      }
+    }
+    result.right_from_left = AlignPointSets(in_left, in_right);
+  }
+  for (size_t v = 0; v < obs.size(); ++v) {
+    if (left.poses[v]) {
+      result.left_from_board[v] = left.poses[v];
+    } else if (right.poses[v]) {
+      result.right_only_from_board[v] = right.poses[v];
+    }
+  }
+  RefineJoint(obs, options, options.method == CalibrationMethod::kRecon, &result);
+  return result;
+}
+
+Pose AlignPointSets(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  LS_CHECK(a.size() == b.size() && a.size() >= 3);
+  Eigen::Vector3d mean_a = Eigen::Vector3d::Zero(), mean_b = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < a.size(); ++i) {
+    mean_a += a[i];
+    mean_b += b[i];
+  }
+  mean_a /= static_cast<double>(a.size());
+  mean_b /= static_cast<double>(b.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // Σ (b − b̄)(a − ā)ᵀ
+  for (size_t i = 0; i < a.size(); ++i) covariance += (b[i] - mean_b) * (a[i] - mean_a).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0)
+    d(2, 2) = -1;  // proper rotation
+  const Eigen::Matrix3d rotation = svd.matrixU() * d * svd.matrixV().transpose();
+  return Pose::FromRotationTranslation(rotation, mean_b - rotation * mean_a);
+}
+
+Eigen::Vector3d TriangulateMidpoint(const Eigen::Vector2d& left_normalized,
+                                    const Eigen::Vector2d& right_normalized,
+                                    const Pose& right_from_left) {
+  Eigen::Vector3d point;
+  detail::TriangulateMidpointT(left_normalized.data(), right_normalized.data(),
+                               right_from_left.params.data(), point.data());
+  return point;
+}
+
+}  // namespace linesight::calib
