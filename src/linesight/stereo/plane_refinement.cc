@@ -1,0 +1,630 @@
+#include "linesight/stereo/plane_refinement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <opencv2/core/utility.hpp>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+#include "linesight/core/timer.h"
+
+namespace linesight {
+
+void PlaneRefinementOptions::Check() const {
+  superpixels.Check();
+  CheckOption(inlier_threshold > 0, "PlaneRefinementOptions.inlier_threshold", inlier_threshold,
+              "must be > 0 px");
+  CheckOption(outlier_threshold >= inlier_threshold, "PlaneRefinementOptions.outlier_threshold",
+              outlier_threshold, "must be >= inlier_threshold");
+  CheckOption(min_support >= 3, "PlaneRefinementOptions.min_support", min_support, "must be >= 3");
+  CheckOption(min_support_ratio >= 0 && min_support_ratio <= 1,
+              "PlaneRefinementOptions.min_support_ratio", min_support_ratio, "must be in [0, 1]");
+  CheckOption(min_inlier_ratio > 0 && min_inlier_ratio <= 1,
+              "PlaneRefinementOptions.min_inlier_ratio", min_inlier_ratio, "must be in (0, 1]");
+  CheckOption(max_residual_rms > 0, "PlaneRefinementOptions.max_residual_rms", max_residual_rms,
+              "must be > 0 px");
+  CheckOption(max_slant > 0, "PlaneRefinementOptions.max_slant", max_slant, "must be > 0 px/px");
+  CheckOption(min_surface_coherence >= 0, "PlaneRefinementOptions.min_surface_coherence",
+              min_surface_coherence, "must be >= 0");
+  CheckOption(ransac_iterations >= 0, "PlaneRefinementOptions.ransac_iterations", ransac_iterations,
+              "must be >= 0");
+  CheckOption(ransac_max_points >= 8, "PlaneRefinementOptions.ransac_max_points", ransac_max_points,
+              "must be >= 8");
+  CheckOption(refit_iterations >= 1, "PlaneRefinementOptions.refit_iterations", refit_iterations,
+              "must be >= 1");
+}
+
+nlohmann::json PlaneRefinementOptions::ToJson() const {
+  return {{"superpixel_size", superpixels.region_size},
+          {"superpixel_compactness", superpixels.compactness},
+          {"superpixel_iterations", superpixels.iterations},
+          {"superpixel_min_size_ratio", superpixels.min_size_ratio},
+          {"inlier_threshold", inlier_threshold},
+          {"outlier_threshold", outlier_threshold},
+          {"min_support", min_support},
+          {"min_support_ratio", min_support_ratio},
+          {"min_inlier_ratio", min_inlier_ratio},
+          {"max_residual_rms", max_residual_rms},
+          {"max_slant", max_slant},
+          {"ransac_iterations", ransac_iterations},
+          {"ransac_max_points", ransac_max_points},
+          {"refit_iterations", refit_iterations},
+          {"two_plane_fallback", two_plane_fallback},
+          {"min_surface_coherence", min_surface_coherence},
+          {"adopt_neighbour_planes", adopt_neighbour_planes},
+          {"snap_inliers", snap_inliers}};
+}
+
+nlohmann::json PlaneRefinementStats::ToJson() const {
+  return {{"segments", segments},
+          {"planar_segments", planar_segments},
+          {"two_plane_segments", two_plane_segments},
+          {"adopted_segments", adopted_segments},
+          {"unexplained_segments", unexplained_segments},
+          {"outliers_replaced", outliers_replaced},
+          {"holes_filled_by_plane", holes_filled_by_plane},
+          {"holes_filled_from_background", holes_filled_from_background},
+          {"superpixel_ms", superpixel_ms},
+          {"plane_fit_ms", plane_fit_ms},
+          {"fill_ms", fill_ms}};
+}
+
+namespace detail {
+namespace {
+
+// SplitMix64: a tiny, well-mixed generator; one stream per segment keeps RANSAC thread-independent.
+struct SplitMix64 {
+  uint64_t state;
+  uint64_t Next() {
+    uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  int Below(int n) { return static_cast<int>(Next() % static_cast<uint64_t>(n)); }
+};
+
+bool WithinSlant(const DisparityPlane& plane, double max_slant) {
+  return std::abs(plane.a) <= max_slant && std::abs(plane.b) <= max_slant;
+}
+
+int CountInliers(const std::vector<PlanePoint>& points, const std::vector<int>& sample,
+                 const DisparityPlane& plane, double threshold) {
+  int count = 0;
+  for (int i : sample) {
+    const PlanePoint& p = points[i];
+    count += std::abs(plane.At(p.x, p.y) - p.d) <= threshold;
+  }
+  return count;
+}
+
+// Marks the inliers of `plane`; returns their count and writes their residual RMS.
+int MarkInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
+                double threshold, std::vector<uint8_t>* mask, double* rms) {
+  mask->assign(points.size(), 0);
+  int count = 0;
+  double squares = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double r = plane.At(points[i].x, points[i].y) - points[i].d;
+    if (std::abs(r) <= threshold) {
+      (*mask)[i] = 1;
+      ++count;
+      squares += r * r;
+    }
+  }
+  *rms = count > 0 ? std::sqrt(squares / count) : 0.0;
+  return count;
+}
+
+}  // namespace
+
+SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments) {
+  LS_CHECK(labels.type() == CV_32SC1);
+  SegmentIndex index;
+  index.offsets.assign(num_segments + 1, 0);
+  for (int y = 0; y < labels.rows; ++y) {
+    const int32_t* l = labels.ptr<int32_t>(y);
+    for (int x = 0; x < labels.cols; ++x) {
+      LS_CHECK(l[x] >= 0 && l[x] < num_segments);
+      ++index.offsets[l[x] + 1];
+    }
+  }
+  for (int s = 0; s < num_segments; ++s) index.offsets[s + 1] += index.offsets[s];
+  index.pixels.resize(labels.total());
+  std::vector<int32_t> cursor(index.offsets.begin(), index.offsets.end() - 1);
+  for (int y = 0; y < labels.rows; ++y) {
+    const int32_t* l = labels.ptr<int32_t>(y);
+    for (int x = 0; x < labels.cols; ++x) index.pixels[cursor[l[x]]++] = y * labels.cols + x;
+  }
+  return index;
+}
+
+PlaneNormalEquations AccumulateNormalEquations(const std::vector<PlanePoint>& points,
+                                               const std::vector<uint8_t>* selected, double ox,
+                                               double oy) {
+  PlaneNormalEquations eq;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (selected && !(*selected)[i]) continue;
+    eq.Add(points[i].x - ox, points[i].y - oy, points[i].d);
+  }
+  return eq;
+}
+
+bool SolvePlane(const PlaneNormalEquations& e, double ox, double oy, DisparityPlane* plane) {
+  if (e.n < 3) return false;
+  // Symmetric 3x3 system [sxx sxy sx; sxy syy sy; sx sy n] [a b c]' = [sxd syd sd]' by cofactors.
+  const double c00 = e.syy * e.n - e.sy * e.sy;
+  const double c01 = e.sy * e.sx - e.sxy * e.n;
+  const double c02 = e.sxy * e.sy - e.syy * e.sx;
+  const double c11 = e.sxx * e.n - e.sx * e.sx;
+  const double c12 = e.sxy * e.sx - e.sxx * e.sy;
+  const double c22 = e.sxx * e.syy - e.sxy * e.sxy;
+  const double det = e.sxx * c00 + e.sxy * c01 + e.sx * c02;
+  // Relative test: collinear points make det vanish against the product of the diagonal.
+  const double scale = e.sxx * e.syy * e.n;
+  if (!(scale > 0) || !(det > 1e-9 * scale)) return false;
+  const double a = (c00 * e.sxd + c01 * e.syd + c02 * e.sd) / det;
+  const double b = (c01 * e.sxd + c11 * e.syd + c12 * e.sd) / det;
+  const double c = (c02 * e.sxd + c12 * e.syd + c22 * e.sd) / det;
+  plane->a = a;
+  plane->b = b;
+  plane->c = c - a * ox - b * oy;
+  return std::isfinite(plane->a) && std::isfinite(plane->b) && std::isfinite(plane->c);
+}
+
+bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinementOptions& options,
+                    uint64_t seed, RobustPlaneFit* fit) {
+  const int n = static_cast<int>(points.size());
+  if (n < 3) return false;
+  const double threshold = options.inlier_threshold;
+  double ox = 0, oy = 0;
+  for (const PlanePoint& p : points) ox += p.x, oy += p.y;
+  ox /= n, oy /= n;
+
+  // Hypotheses are scored on an even subsample of at most ransac_max_points pixels.
+  std::vector<int> sample;
+  const int sample_size = std::min(n, options.ransac_max_points);
+  sample.reserve(sample_size);
+  for (int i = 0; i < sample_size; ++i) {
+    sample.push_back(static_cast<int>(static_cast<int64_t>(i) * n / sample_size));
+  }
+
+  // The fronto-parallel median is a hypothesis that small or noisy segments often need.
+  std::vector<float> values(n);
+  for (int i = 0; i < n; ++i) values[i] = points[i].d;
+  std::nth_element(values.begin(), values.begin() + n / 2, values.end());
+  DisparityPlane best{0, 0, values[n / 2]};
+  int best_score = CountInliers(points, sample, best, threshold);
+
+  SplitMix64 rng{seed};
+  for (int it = 0; it < options.ransac_iterations; ++it) {
+    const int i = rng.Below(n), j = rng.Below(n), k = rng.Below(n);
+    if (i == j || j == k || i == k) continue;
+    const PlanePoint &p = points[i], &q = points[j], &r = points[k];
+    const double ux = q.x - p.x, uy = q.y - p.y, ud = q.d - p.d;
+    const double vx = r.x - p.x, vy = r.y - p.y, vd = r.d - p.d;
+    const double nx = uy * vd - ud * vy, ny = ud * vx - ux * vd, nz = ux * vy - uy * vx;
+    if (std::abs(nz) < 1e-6) continue;  // collinear in the image
+    DisparityPlane h;
+    h.a = -nx / nz;
+    h.b = -ny / nz;
+    h.c = p.d - h.a * p.x - h.b * p.y;
+    if (!WithinSlant(h, options.max_slant)) continue;
+    const int score = CountInliers(points, sample, h, threshold);
+    if (score > best_score) {
+      best_score = score;
+      best = h;
+    }
+  }
+
+  // Least squares on the inliers, re-selected after every refit.
+  for (int it = 0; it < options.refit_iterations; ++it) {
+    double rms;
+    if (MarkInliers(points, best, threshold, &fit->inlier_mask, &rms) < 3) break;
+    DisparityPlane refined;
+    if (!SolvePlane(AccumulateNormalEquations(points, &fit->inlier_mask, ox, oy), ox, oy,
+                    &refined) ||
+        !WithinSlant(refined, options.max_slant)) {
+      break;
+    }
+    best = refined;
+  }
+  fit->plane = best;
+  fit->inliers = MarkInliers(points, best, threshold, &fit->inlier_mask, &fit->residual_rms);
+  return true;
+}
+
+namespace {
+
+void CollectValidPoints(const cv::Mat& disparity, const SegmentIndex& index, int segment,
+                        std::vector<PlanePoint>* points) {
+  points->clear();
+  const float* d = disparity.ptr<float>();
+  const int width = disparity.cols;
+  for (int i = index.offsets[segment]; i < index.offsets[segment + 1]; ++i) {
+    const int p = index.pixels[i];
+    if (IsValidDisparity(d[p])) {
+      points->push_back({static_cast<float>(p % width), static_cast<float>(p / width), d[p]});
+    }
+  }
+}
+
+// Mean number of 4-neighbours that are also in the set, over the points of `members` (a subset of
+// `points` marked by `in_set`). A surface gives 2..4; scattered mismatches that happen to agree on
+// a plane give < 1.
+double SetCoherence(const std::vector<PlanePoint>& points, const std::vector<uint8_t>& in_set) {
+  int x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN, y1 = INT32_MIN, members = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!in_set[i]) continue;
+    x0 = std::min(x0, static_cast<int>(points[i].x)),
+    x1 = std::max(x1, static_cast<int>(points[i].x));
+    y0 = std::min(y0, static_cast<int>(points[i].y)),
+    y1 = std::max(y1, static_cast<int>(points[i].y));
+    ++members;
+  }
+  if (members == 0) return 0;
+  const int w = x1 - x0 + 3, h = y1 - y0 + 3;  // one pixel of margin on every side
+  std::vector<uint8_t> map(static_cast<size_t>(w) * h, 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (in_set[i])
+      map[(static_cast<int>(points[i].y) - y0 + 1) * w + static_cast<int>(points[i].x) - x0 + 1] =
+          1;
+  }
+  int64_t links = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!in_set[i]) continue;
+    const int at =
+        (static_cast<int>(points[i].y) - y0 + 1) * w + static_cast<int>(points[i].x) - x0 + 1;
+    links += map[at - 1] + map[at + 1] + map[at - w] + map[at + w];
+  }
+  return static_cast<double>(links) / members;
+}
+
+bool Acceptable(const RobustPlaneFit& fit, const PlaneRefinementOptions& options) {
+  return fit.residual_rms <= options.max_residual_rms && WithinSlant(fit.plane, options.max_slant);
+}
+
+SegmentModel FitOneSegment(const std::vector<PlanePoint>& points, int segment_size, int segment,
+                           const PlaneRefinementOptions& options) {
+  SegmentModel model;
+  model.valid = static_cast<int>(points.size());
+  const int needed = std::max(
+      options.min_support, static_cast<int>(std::ceil(options.min_support_ratio * segment_size)));
+  if (model.valid < needed) return model;
+  const uint64_t seed = 0x5EED0000ull + 2ull * static_cast<uint64_t>(segment);
+  RobustPlaneFit first;
+  if (!FitPlaneRobust(points, options, seed, &first) || !Acceptable(first, options)) return model;
+
+  // The pixels the dominant plane leaves out may form a second surface: a depth edge inside the
+  // segment. Then both planes are kept so the smaller surface is not flattened onto the larger one.
+  const int rest_count = model.valid - first.inliers;
+  if (options.two_plane_fallback && first.inliers >= options.min_support &&
+      rest_count >= options.min_support) {
+    std::vector<PlanePoint> rest;
+    rest.reserve(rest_count);
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (!first.inlier_mask[i]) rest.push_back(points[i]);
+    }
+    RobustPlaneFit second;
+    if (FitPlaneRobust(rest, options, seed + 1, &second) && Acceptable(second, options) &&
+        second.inliers >= options.min_support && 2 * second.inliers >= rest_count &&
+        first.inliers + second.inliers >= options.min_inlier_ratio * model.valid &&
+        SetCoherence(rest, second.inlier_mask) >= options.min_surface_coherence) {
+      model.kind = SegmentModelKind::kTwoPlanes;
+      model.planes = {first.plane, second.plane};
+      model.inliers = first.inliers + second.inliers;
+      return model;
+    }
+  }
+  if (first.inliers >= options.min_inlier_ratio * model.valid) {
+    model.kind = SegmentModelKind::kPlane;
+    model.planes[0] = first.plane;
+    model.inliers = first.inliers;
+  }
+  return model;
+}
+
+}  // namespace
+
+std::vector<SegmentModel> FitSegmentPlanes(const cv::Mat& disparity, const SegmentIndex& index,
+                                           const PlaneRefinementOptions& options) {
+  LS_CHECK(disparity.type() == CV_32FC1 && disparity.isContinuous());
+  const int segments = static_cast<int>(index.offsets.size()) - 1;
+  std::vector<SegmentModel> models(segments);
+  cv::parallel_for_(cv::Range(0, segments), [&](const cv::Range& range) {
+    std::vector<PlanePoint> points;
+    for (int s = range.start; s < range.end; ++s) {
+      CollectValidPoints(disparity, index, s, &points);
+      models[s] = FitOneSegment(points, index.Size(s), s, options);
+    }
+  });
+  return models;
+}
+
+void AdoptNeighbourPlanes(const cv::Mat& disparity, const cv::Mat& labels,
+                          const SegmentIndex& index, const PlaneRefinementOptions& options,
+                          std::vector<SegmentModel>* models) {
+  const int segments = static_cast<int>(models->size());
+  // Adjacent segment pairs (4-neighbourhood), sorted and unique.
+  std::vector<std::pair<int32_t, int32_t>> edges;
+  for (int y = 0; y < labels.rows; ++y) {
+    const int32_t* l = labels.ptr<int32_t>(y);
+    const int32_t* below = y + 1 < labels.rows ? labels.ptr<int32_t>(y + 1) : nullptr;
+    for (int x = 0; x < labels.cols; ++x) {
+      if (x + 1 < labels.cols && l[x + 1] != l[x]) {
+        edges.emplace_back(l[x], l[x + 1]);
+        edges.emplace_back(l[x + 1], l[x]);
+      }
+      if (below && below[x] != l[x]) {
+        edges.emplace_back(l[x], below[x]);
+        edges.emplace_back(below[x], l[x]);
+      }
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  std::vector<int32_t> first_edge(segments + 1, 0);
+  for (const auto& e : edges) ++first_edge[e.first + 1];
+  for (int s = 0; s < segments; ++s) first_edge[s + 1] += first_edge[s];
+
+  // Candidates come from the models as fitted (not from other adoptions), so the order does not
+  // matter.
+  const std::vector<SegmentModel> fitted = *models;
+  cv::parallel_for_(cv::Range(0, segments), [&](const cv::Range& range) {
+    std::vector<PlanePoint> points;
+    for (int s = range.start; s < range.end; ++s) {
+      if (fitted[s].kind != SegmentModelKind::kNone || fitted[s].valid < 3) continue;
+      CollectValidPoints(disparity, index, s, &points);
+      int best_score = 0;
+      DisparityPlane best;
+      for (int e = first_edge[s]; e < first_edge[s + 1]; ++e) {
+        const SegmentModel& neighbour = fitted[edges[e].second];
+        const int planes = neighbour.kind == SegmentModelKind::kPlane       ? 1
+                           : neighbour.kind == SegmentModelKind::kTwoPlanes ? 2
+                                                                            : 0;
+        for (int k = 0; k < planes; ++k) {
+          const DisparityPlane& plane = neighbour.planes[k];
+          int score = 0;
+          for (const PlanePoint& p : points) {
+            score += std::abs(plane.At(p.x, p.y) - p.d) <= options.inlier_threshold;
+          }
+          if (score > best_score) {
+            best_score = score;
+            best = plane;
+          }
+        }
+      }
+      if (best_score >= 3 && best_score >= options.min_inlier_ratio * points.size()) {
+        SegmentModel& model = (*models)[s];
+        model.kind = SegmentModelKind::kAdopted;
+        model.planes[0] = best;
+        model.inliers = best_score;
+      }
+    }
+  });
+}
+
+namespace {
+
+// A segment with two surfaces: valid disparities near one plane stay (or snap to it); mismatches
+// and holes take the plane of the surface that encloses them on their row inside the segment (both
+// nearest surface pixels left and right agree, or only one side exists); between two different
+// surfaces (an occlusion) they take the background, i.e. the smaller plane value.
+void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& model,
+                    const PlaneRefinementOptions& options, float min_value, float max_value,
+                    int width, float* d, int64_t* filled) {
+  constexpr int8_t kHole = -1;
+  const int begin = index.offsets[segment], end = index.offsets[segment + 1];
+  std::vector<int8_t> surface(end - begin);
+  auto plane_value = [&](int k, int p) {
+    return std::clamp(static_cast<float>(model.planes[k].At(p % width, p / width)), min_value,
+                      max_value);
+  };
+  for (int i = begin; i < end; ++i) {
+    const int p = index.pixels[i];
+    int8_t& s = surface[i - begin];
+    s = kHole;
+    if (!IsValidDisparity(d[p])) continue;
+    const float p0 = plane_value(0, p), p1 = plane_value(1, p);
+    const float r0 = std::abs(d[p] - p0), r1 = std::abs(d[p] - p1);
+    if (std::min(r0, r1) > options.outlier_threshold) {
+      d[p] = kInvalidDisparity;  // a mismatch on neither surface
+      continue;
+    }
+    s = r0 <= r1 ? 0 : 1;
+    if (options.snap_inliers) d[p] = s == 0 ? p0 : p1;
+  }
+  // Pixels of one row are consecutive in the index (raster order).
+  std::vector<int8_t> left_surface;
+  for (int row_begin = begin; row_begin < end;) {
+    const int y = index.pixels[row_begin] / width;
+    int row_end = row_begin;
+    while (row_end < end && index.pixels[row_end] / width == y) ++row_end;
+    left_surface.assign(row_end - row_begin, kHole);
+    int8_t last = kHole;
+    for (int i = row_begin; i < row_end; ++i) {
+      if (surface[i - begin] != kHole) last = surface[i - begin];
+      left_surface[i - row_begin] = last;
+    }
+    int8_t next = kHole;
+    for (int i = row_end - 1; i >= row_begin; --i) {
+      const int8_t s = surface[i - begin];
+      if (s != kHole) {
+        next = s;
+        continue;
+      }
+      const int8_t left = left_surface[i - row_begin];
+      if (left == kHole && next == kHole) continue;  // left to the background fill
+      const int p = index.pixels[i];
+      if (left == kHole || next == kHole || left == next) {
+        d[p] = plane_value(left == kHole ? next : left, p);
+      } else {
+        d[p] = std::min(plane_value(0, p), plane_value(1, p));
+      }
+      ++*filled;
+    }
+    row_begin = row_end;
+  }
+}
+
+}  // namespace
+
+void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentModel>& models,
+                        const PlaneRefinementOptions& options, float min_value, float max_value,
+                        cv::Mat* disparity, PlaneRefinementStats* stats) {
+  LS_CHECK(disparity->type() == CV_32FC1 && disparity->isContinuous());
+  const int segments = static_cast<int>(models.size());
+  const int width = disparity->cols;
+  float* d = disparity->ptr<float>();
+  std::vector<int64_t> replaced(segments, 0), filled(segments, 0);
+  cv::parallel_for_(cv::Range(0, segments), [&](const cv::Range& range) {
+    for (int s = range.start; s < range.end; ++s) {
+      const SegmentModel& model = models[s];
+      if (model.kind == SegmentModelKind::kNone) continue;
+      const bool two = model.kind == SegmentModelKind::kTwoPlanes;
+      for (int i = index.offsets[s]; !two && i < index.offsets[s + 1]; ++i) {
+        const int p = index.pixels[i];
+        const double x = p % width, y = p / width;
+        const float value = d[p];
+        const bool valid = IsValidDisparity(value);
+        const float plane =
+            std::clamp(static_cast<float>(model.planes[0].At(x, y)), min_value, max_value);
+        if (!valid) {
+          d[p] = plane;
+          ++filled[s];
+        } else if (std::abs(value - plane) > options.outlier_threshold) {
+          d[p] = plane;
+          ++replaced[s];
+        } else if (options.snap_inliers) {
+          d[p] = plane;
+        }
+      }
+      if (two) ApplyTwoPlanes(index, s, model, options, min_value, max_value, width, d, &filled[s]);
+    }
+  });
+  if (stats) {
+    for (int s = 0; s < segments; ++s) {
+      stats->outliers_replaced += replaced[s];
+      stats->holes_filled_by_plane += filled[s];
+    }
+  }
+}
+
+int64_t FillFromBackground(cv::Mat* disparity) {
+  LS_CHECK(disparity->type() == CV_32FC1);
+  const int width = disparity->cols, height = disparity->rows;
+  int64_t filled = 0;
+  std::vector<uint8_t> row_has_valid(height, 0);
+  std::vector<float> from_left(width);
+  for (int y = 0; y < height; ++y) {
+    float* d = disparity->ptr<float>(y);
+    float last = kInvalidDisparity;
+    for (int x = 0; x < width; ++x) {
+      if (IsValidDisparity(d[x])) last = d[x];
+      from_left[x] = last;
+    }
+    if (!IsValidDisparity(last)) continue;
+    row_has_valid[y] = 1;
+    float next = kInvalidDisparity;
+    for (int x = width - 1; x >= 0; --x) {
+      if (IsValidDisparity(d[x])) {
+        next = d[x];
+        continue;
+      }
+      // +inf on a missing side makes min() pick the other side.
+      d[x] = std::min(from_left[x], next);
+      ++filled;
+    }
+  }
+  // Rows without any valid pixel copy the nearest row that had one (the upper one on a tie).
+  int nearest_above = -1;
+  for (int y = 0; y < height; ++y) {
+    if (row_has_valid[y]) {
+      nearest_above = y;
+      continue;
+    }
+    int nearest_below = -1;
+    for (int yy = y + 1; yy < height; ++yy) {
+      if (row_has_valid[yy]) {
+        nearest_below = yy;
+        break;
+      }
+    }
+    int source = nearest_above;
+    if (source < 0 || (nearest_below >= 0 && nearest_below - y < y - nearest_above)) {
+      source = nearest_below;
+    }
+    if (source < 0) {
+      disparity->row(y).setTo(0.0f);
+    } else {
+      disparity->row(source).copyTo(disparity->row(y));
+    }
+    filled += width;
+  }
+  return filled;
+}
+
+}  // namespace detail
+
+cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_image,
+                                  const PlaneRefinementOptions& options,
+                                  PlaneRefinementStats* stats) {
+  options.Check();
+  if (disparity.type() != CV_32FC1) {
+    throw InputError(
+        fmt::format("plane refinement needs a CV_32FC1 disparity, got type {}", disparity.type()));
+  }
+  if (disparity.size() != left_image.size()) {
+    throw InputError(fmt::format("disparity is {}x{} but the left image is {}x{}", disparity.cols,
+                                 disparity.rows, left_image.cols, left_image.rows));
+  }
+  PlaneRefinementStats local;
+  PlaneRefinementStats& st = stats ? *stats : local;
+  st = PlaneRefinementStats();
+  cv::Mat out = disparity.clone();  // continuous
+
+  float min_value = std::numeric_limits<float>::max(),
+        max_value = std::numeric_limits<float>::lowest();
+  for (int y = 0; y < out.rows; ++y) {
+    const float* d = out.ptr<float>(y);
+    for (int x = 0; x < out.cols; ++x) {
+      if (!IsValidDisparity(d[x])) continue;
+      min_value = std::min(min_value, d[x]);
+      max_value = std::max(max_value, d[x]);
+    }
+  }
+  if (min_value > max_value) {
+    out.setTo(0.0f);
+    st.holes_filled_from_background = static_cast<int64_t>(out.total());
+    return out;
+  }
+
+  Stopwatch watch;
+  int segments = 0;
+  const cv::Mat labels = SegmentSuperpixels(left_image, options.superpixels, &segments);
+  st.segments = segments;
+  st.superpixel_ms = watch.ElapsedMs();
+
+  watch.Restart();
+  const detail::SegmentIndex index = detail::BuildSegmentIndex(labels, segments);
+  std::vector<detail::SegmentModel> models = detail::FitSegmentPlanes(out, index, options);
+  if (options.adopt_neighbour_planes)
+    detail::AdoptNeighbourPlanes(out, labels, index, options, &models);
+  for (const detail::SegmentModel& m : models) {
+    st.planar_segments += m.kind == detail::SegmentModelKind::kPlane;
+    st.two_plane_segments += m.kind == detail::SegmentModelKind::kTwoPlanes;
+    st.adopted_segments += m.kind == detail::SegmentModelKind::kAdopted;
+    st.unexplained_segments += m.kind == detail::SegmentModelKind::kNone;
+  }
+  st.plane_fit_ms = watch.ElapsedMs();
+
+  watch.Restart();
+  detail::ApplySegmentPlanes(index, models, options, min_value, max_value, &out, &st);
+  st.holes_filled_from_background = detail::FillFromBackground(&out);
+  st.fill_ms = watch.ElapsedMs();
+  return out;
+}
+
+}  // namespace linesight

@@ -1,0 +1,168 @@
+// ISGM refinement: least-squares disparity planes inside superpixels of the left image.
+//
+// Stages (each a free function in linesight::detail):
+//   SegmentSuperpixels         superpixels of the left image (superpixels.h)
+//   BuildSegmentIndex          pixel lists per segment
+//   FitSegmentPlanes           per segment a robust plane d = a*x + b*y + c through its valid
+//   disparities:
+//                              RANSAC on a deterministic sample, then iterated least squares on the
+//                              inliers (3x3 normal equations); validated by inlier ratio, residual
+//                              RMS and slant; a segment that one plane does not explain may take
+//                              two planes (it straddles a depth edge) or none
+//   AdoptNeighbourPlanes       a segment without a plane of its own takes the plane of an adjacent
+//   segment
+//                              that explains its valid disparities
+//   ApplySegmentPlanes         outliers (far from the accepted plane) and holes take the plane
+//   value FillFromBackground         what is still invalid takes the smaller (background) disparity
+//   of the nearest
+//                              valid pixels to the left and right along the row (Hirschmueller's
+//                              occlusion filling); the result is 100 % dense
+// Every stage is deterministic and independent of the thread count (per-segment work writes only
+// its own pixels; RANSAC draws from a generator seeded by the segment number).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "linesight/stereo/superpixels.h"
+
+namespace linesight {
+
+struct PlaneRefinementOptions {
+  SuperpixelOptions superpixels;  // segmentation of the left image
+  double inlier_threshold = 1.0;  // px: a disparity within this distance of a plane supports it
+  double outlier_threshold =
+      2.0;  // px: a valid disparity farther than this from its segment's accepted plane
+            // is a mismatch and is replaced by the plane value; >= inlier_threshold
+  int min_support = 10;  // minimum number of valid disparities for fitting a plane, >= 3
+  double min_support_ratio =
+      0.2;  // minimum fraction of a segment's pixels that are valid for a fit, [0, 1]
+  double min_inlier_ratio = 0.65;  // fraction of the valid disparities a plane must explain, (0, 1]
+  double max_residual_rms = 0.6;  // px: RMS residual of the inliers an accepted plane may have, > 0
+  double max_slant = 1.5;         // px/px: largest |a| and |b| of an accepted plane, > 0
+  int ransac_iterations = 40;     // random 3-point hypotheses per segment, >= 0
+  int ransac_max_points =
+      96;  // pixels scored per hypothesis (an even subsample of larger segments), >= 8
+  int refit_iterations = 3;  // least-squares refits on the current inliers, >= 1
+  bool two_plane_fallback =
+      true;  // a segment one plane cannot explain may take two (depth edge inside)
+  // Mean number of 4-neighbours (0..4) that the second plane's pixels have among themselves: a
+  // second surface must be a region (even a 1-px wire scores 2), not scattered mismatches that
+  // happen to agree, >= 0
+  double min_surface_coherence = 1.5;
+  bool adopt_neighbour_planes =
+      true;                   // segments without a plane try the planes of adjacent segments
+  bool snap_inliers = false;  // also replace valid disparities near the plane by the plane value
+
+  void Check() const;
+  nlohmann::json ToJson() const;
+};
+
+struct PlaneRefinementStats {
+  int segments = 0;
+  int planar_segments = 0;       // one plane of their own
+  int two_plane_segments = 0;    // two planes (straddling a depth edge)
+  int adopted_segments = 0;      // a neighbour's plane
+  int unexplained_segments = 0;  // no plane: disparities kept, holes filled from the background
+  int64_t outliers_replaced = 0;
+  int64_t holes_filled_by_plane = 0;
+  int64_t holes_filled_from_background = 0;
+  double superpixel_ms = 0, plane_fit_ms = 0, fill_ms = 0;
+
+  nlohmann::json ToJson() const;
+};
+
+// disparity: CV_32FC1, +inf = invalid; left_image: the matched left image (8-bit grey or BGR), same
+// size. Returns a dense CV_32FC1 disparity whose values stay within the range of the input's valid
+// values (an input without any valid pixel gives all zeros).
+cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_image,
+                                  const PlaneRefinementOptions& options,
+                                  PlaneRefinementStats* stats = nullptr);
+
+namespace detail {
+
+// d = a*x + b*y + c in absolute pixel coordinates.
+struct DisparityPlane {
+  double a = 0, b = 0, c = 0;
+  double At(double x, double y) const { return a * x + b * y + c; }
+};
+
+// Sums of the least-squares normal equations for d ~ a*x + b*y + c. Coordinates are taken relative
+// to an origin (ox, oy) so that the sums stay well conditioned.
+struct PlaneNormalEquations {
+  double sxx = 0, sxy = 0, syy = 0, sx = 0, sy = 0, n = 0, sxd = 0, syd = 0, sd = 0;
+  void Add(double x, double y, double d) {
+    sxx += x * x, sxy += x * y, syy += y * y, sx += x, sy += y, n += 1;
+    sxd += x * d, syd += y * d, sd += d;
+  }
+};
+
+struct PlanePoint {
+  float x, y, d;
+};
+
+// Pixel indices (y * width + x) of every segment: segment s owns pixels[offsets[s] ..
+// offsets[s+1]).
+struct SegmentIndex {
+  std::vector<int32_t> offsets;
+  std::vector<int32_t> pixels;
+  int Size(int segment) const { return offsets[segment + 1] - offsets[segment]; }
+};
+
+enum class SegmentModelKind : uint8_t { kNone, kPlane, kTwoPlanes, kAdopted };
+
+struct SegmentModel {
+  SegmentModelKind kind = SegmentModelKind::kNone;
+  std::array<DisparityPlane, 2> planes;
+  int valid = 0;    // valid disparities in the segment
+  int inliers = 0;  // of those, explained by the model
+};
+
+SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments);
+
+// Accumulates the normal equations of `points` about origin (ox, oy).
+PlaneNormalEquations AccumulateNormalEquations(const std::vector<PlanePoint>& points,
+                                               const std::vector<uint8_t>* selected, double ox,
+                                               double oy);
+
+// Least-squares plane from the normal equations about (ox, oy); false when the points do not
+// determine a plane (fewer than 3 or collinear).
+bool SolvePlane(const PlaneNormalEquations& equations, double ox, double oy, DisparityPlane* plane);
+
+struct RobustPlaneFit {
+  DisparityPlane plane;
+  int inliers = 0;
+  double residual_rms = 0;  // px, over the inliers
+  std::vector<uint8_t> inlier_mask;
+};
+
+// RANSAC (plus the fronto-parallel median hypothesis) then least-squares refits on the inliers.
+// Returns false if no hypothesis within the slant limit exists.
+bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinementOptions& options,
+                    uint64_t seed, RobustPlaneFit* fit);
+
+std::vector<SegmentModel> FitSegmentPlanes(const cv::Mat& disparity, const SegmentIndex& index,
+                                           const PlaneRefinementOptions& options);
+
+void AdoptNeighbourPlanes(const cv::Mat& disparity, const cv::Mat& labels,
+                          const SegmentIndex& index, const PlaneRefinementOptions& options,
+                          std::vector<SegmentModel>* models);
+
+// Writes plane values over outliers and holes of every segment with a model (in two-plane segments
+// holes take the surface that encloses them along the row, or the background between two surfaces).
+// Values are clamped to [min_value, max_value].
+void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentModel>& models,
+                        const PlaneRefinementOptions& options, float min_value, float max_value,
+                        cv::Mat* disparity, PlaneRefinementStats* stats);
+
+// Fills every invalid pixel with the smaller of the nearest valid disparities left and right on its
+// row (one side if only one exists); rows without any valid pixel copy the nearest filled row; an
+// image without any valid pixel becomes 0. Returns the number of pixels filled.
+int64_t FillFromBackground(cv::Mat* disparity);
+
+}  // namespace detail
+}  // namespace linesight

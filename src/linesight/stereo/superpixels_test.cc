@@ -1,0 +1,152 @@
+#include "linesight/stereo/superpixels.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <queue>
+#include <set>
+
+#include "linesight/core/error.h"
+
+namespace linesight {
+namespace {
+
+cv::Mat RandomColourImage(int width, int height, uint64_t seed) {
+  cv::RNG rng(seed);
+  cv::Mat image(height, width, CV_8UC3);
+  rng.fill(image, cv::RNG::UNIFORM, 0, 256);
+  cv::GaussianBlur(image, image, cv::Size(7, 7), 2.0);
+  return image;
+}
+
+// Number of 4-connected pieces of every label (a naive flood fill).
+std::map<int, int> PiecesPerLabel(const cv::Mat& labels) {
+  cv::Mat seen(labels.size(), CV_8UC1, cv::Scalar(0));
+  std::map<int, int> pieces;
+  for (int y = 0; y < labels.rows; ++y) {
+    for (int x = 0; x < labels.cols; ++x) {
+      if (seen.at<uint8_t>(y, x)) continue;
+      const int label = labels.at<int32_t>(y, x);
+      ++pieces[label];
+      std::queue<cv::Point> queue;
+      queue.push({x, y});
+      seen.at<uint8_t>(y, x) = 1;
+      while (!queue.empty()) {
+        const cv::Point p = queue.front();
+        queue.pop();
+        const cv::Point next[4] = {{p.x - 1, p.y}, {p.x + 1, p.y}, {p.x, p.y - 1}, {p.x, p.y + 1}};
+        for (const cv::Point& q : next) {
+          if (q.x < 0 || q.y < 0 || q.x >= labels.cols || q.y >= labels.rows) continue;
+          if (seen.at<uint8_t>(q) || labels.at<int32_t>(q) != label) continue;
+          seen.at<uint8_t>(q) = 1;
+          queue.push(q);
+        }
+      }
+    }
+  }
+  return pieces;
+}
+
+TEST(SuperpixelOptions, DefaultsAreValid) { EXPECT_NO_THROW(SuperpixelOptions().Check()); }
+
+TEST(SuperpixelOptions, Boundaries) {
+  SuperpixelOptions o;
+  o.region_size = 4;
+  EXPECT_NO_THROW(o.Check());
+  o.region_size = 3;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = SuperpixelOptions();
+  o.compactness = 0;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = SuperpixelOptions();
+  o.iterations = 0;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = SuperpixelOptions();
+  o.min_size_ratio = 1.0;
+  EXPECT_NO_THROW(o.Check());
+  o.min_size_ratio = 1.01;
+  EXPECT_THROW(o.Check(), OptionError);
+}
+
+TEST(SegmentSuperpixels, LabelsAreDenseConnectedAndNumberedInRasterOrder) {
+  const cv::Mat image = RandomColourImage(311, 239, 3);
+  SuperpixelOptions o;
+  int n = 0;
+  const cv::Mat labels = SegmentSuperpixels(image, o, &n);
+  ASSERT_EQ(labels.type(), CV_32SC1);
+  ASSERT_EQ(labels.size(), image.size());
+  // About one segment per grid cell (26 x 20 seeds).
+  EXPECT_GT(n, 26 * 20 / 2);
+  EXPECT_LT(n, 26 * 20 * 2);
+  const auto pieces = PiecesPerLabel(labels);
+  ASSERT_EQ(static_cast<int>(pieces.size()), n);
+  for (const auto& [label, count] : pieces) {
+    EXPECT_EQ(count, 1) << "label " << label << " is not connected";
+  }
+  // Raster order of first pixels: labels appear as 0, 1, 2, ... when scanning.
+  int next = 0;
+  for (int y = 0; y < labels.rows; ++y) {
+    for (int x = 0; x < labels.cols; ++x) {
+      const int l = labels.at<int32_t>(y, x);
+      ASSERT_LE(l, next);
+      if (l == next) ++next;
+    }
+  }
+  EXPECT_EQ(next, n);
+}
+
+TEST(SegmentSuperpixels, FollowsAStrongColourEdgeOffTheGrid) {
+  // Two flat colours split at x = 53, which is not a grid line of region_size 12.
+  cv::Mat image(96, 120, CV_8UC3, cv::Scalar(40, 60, 200));
+  image.colRange(53, 120).setTo(cv::Scalar(200, 180, 30));
+  int n = 0;
+  const cv::Mat labels = SegmentSuperpixels(image, SuperpixelOptions(), &n);
+  std::set<int> left, right;
+  for (int y = 0; y < labels.rows; ++y) {
+    for (int x = 0; x < labels.cols; ++x) (x < 53 ? left : right).insert(labels.at<int32_t>(y, x));
+  }
+  for (int l : left) EXPECT_EQ(right.count(l), 0u) << "segment " << l << " crosses the edge";
+}
+
+TEST(SegmentSuperpixels, GreyInputAndTinyImage) {
+  cv::Mat grey(7, 5, CV_8UC1, cv::Scalar(9));
+  int n = 0;
+  const cv::Mat labels = SegmentSuperpixels(grey, SuperpixelOptions(), &n);
+  EXPECT_EQ(n, 1);
+  EXPECT_EQ(cv::countNonZero(labels), 0);
+}
+
+TEST(SegmentSuperpixels, RejectsFloatImage) {
+  int n = 0;
+  EXPECT_THROW(SegmentSuperpixels(cv::Mat(10, 10, CV_32FC1), SuperpixelOptions(), &n), InputError);
+}
+
+TEST(SegmentSuperpixels, IndependentOfThreadCount) {
+  const cv::Mat image = RandomColourImage(257, 131, 11);
+  const int saved = cv::getNumThreads();
+  int n1 = 0, n2 = 0;
+  cv::setNumThreads(1);
+  const cv::Mat one = SegmentSuperpixels(image, SuperpixelOptions(), &n1);
+  cv::setNumThreads(4);
+  const cv::Mat four = SegmentSuperpixels(image, SuperpixelOptions(), &n2);
+  cv::setNumThreads(saved);
+  EXPECT_EQ(n1, n2);
+  EXPECT_EQ(cv::countNonZero(one != four), 0);
+}
+
+TEST(EnforceConnectivity, SplitsPiecesAndMergesSmallOnes) {
+  // Label 0 in two pieces; label 2 a single pixel (smaller than min_size 2) inside label 1.
+  cv::Mat labels = (cv::Mat_<int32_t>(3, 5) << 0, 0, 1, 0, 0,  //
+                    1, 1, 1, 1, 1,                             //
+                    1, 2, 1, 1, 1);
+  const int n = detail::EnforceConnectivity(&labels, 2);
+  const cv::Mat expected = (cv::Mat_<int32_t>(3, 5) << 0, 0, 1, 2, 2,  //
+                            1, 1, 1, 1, 1,                             //
+                            1, 1, 1, 1, 1);
+  EXPECT_EQ(n, 3);
+  EXPECT_EQ(cv::countNonZero(labels != expected), 0) << labels;
+}
+
+}  // namespace
+}  // namespace linesight
