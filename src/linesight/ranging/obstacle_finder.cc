@@ -1,0 +1,142 @@
+#include "linesight/ranging/obstacle_finder.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+void ObstacleFinderOptions::Check() const {
+  CheckOption(min_depth_m > 0.0, "ObstacleFinderOptions.min_depth_m", min_depth_m, "must be > 0");
+  CheckOption(max_depth_m > min_depth_m, "ObstacleFinderOptions.max_depth_m", max_depth_m,
+              "must exceed min_depth_m");
+  CheckOption(min_width_m > 0.0, "ObstacleFinderOptions.min_width_m", min_width_m, "must be > 0");
+  CheckOption(depth_band_relative > 0.0 && depth_band_relative <= 0.5,
+              "ObstacleFinderOptions.depth_band_relative", depth_band_relative,
+              "must be in (0, 0.5]");
+  CheckOption(min_area_px >= 1, "ObstacleFinderOptions.min_area_px", min_area_px, "must be >= 1");
+  CheckOption(merge_overlap > 0.0 && merge_overlap <= 1.0, "ObstacleFinderOptions.merge_overlap",
+              merge_overlap, "must be in (0, 1]");
+}
+
+std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const StereoGeometry& geometry,
+                                          const ObstacleFinderOptions& options) {
+  options.Check();
+  CheckDisparityMap(disparity, "disparity");
+  const double offset = geometry.disparity_offset_px;
+  const double d_low = geometry.DisparityFromDepth(options.max_depth_m);
+  const double d_high = geometry.DisparityFromDepth(options.min_depth_m);
+  const double log_low = std::log(d_low + offset);
+  const double band = options.depth_band_relative;
+  const int bands = int(std::ceil((std::log(d_high + offset) - log_low) / band)) + 1;
+
+  // Band index of every pixel in the working range (-1 elsewhere).
+  cv::Mat band_of(disparity.size(), CV_32S, cv::Scalar(-1));
+  for (int y = 0; y < disparity.rows; ++y) {
+    const float* d = disparity.ptr<float>(y);
+    int* b = band_of.ptr<int>(y);
+    for (int x = 0; x < disparity.cols; ++x) {
+      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) {
+        b[x] = std::clamp(int((std::log(d[x] + offset) - log_low) / band), 0, bands - 1);
+      }
+    }
+  }
+
+  // Thick pixels: inside a surface of neighbouring bands (k-1..k+1) by at least min_width / 2 at
+  // that depth.
+  cv::Mat thick(disparity.size(), CV_8U, cv::Scalar(0));
+  cv::Mat mask(disparity.size(), CV_8U), distance;
+  for (int k = 0; k < bands; ++k) {
+    if (cv::countNonZero(band_of == k) == 0) continue;
+    cv::inRange(band_of, k - 1, k + 1, mask);
+    // Pad so that the image border does not count as a surface edge: it clips obstacles, not
+    // conductors.
+    cv::Mat padded;
+    cv::copyMakeBorder(mask, padded, 1, 1, 1, 1, cv::BORDER_REPLICATE);
+    cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
+    const double d_band = std::exp(log_low + (k + 0.5) * band) - offset;
+    const double radius_px =
+        0.5 * options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d_band);
+    for (int y = 0; y < disparity.rows; ++y) {
+      const int* b = band_of.ptr<int>(y);
+      const float* dt = distance.ptr<float>(y + 1) + 1;
+      uchar* t = thick.ptr<uchar>(y);
+      for (int x = 0; x < disparity.cols; ++x) {
+        if (b[x] == k && dt[x] >= radius_px) t[x] = 255;
+      }
+    }
+  }
+
+  // Regions: connected thick pixels, grown back by the erosion radius over pixels of similar depth.
+  cv::Mat labels, stats, centroids;
+  const int count = cv::connectedComponentsWithStats(thick, labels, stats, centroids, 8, CV_32S);
+  std::vector<cv::Rect> boxes;
+  for (int label = 1; label < count; ++label) {
+    cv::Rect box(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
+                 stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
+    // Median band of the region, to grow over its own surface only.
+    std::vector<int> region_bands;
+    for (int y = box.y; y < box.y + box.height; ++y) {
+      for (int x = box.x; x < box.x + box.width; ++x) {
+        if (labels.at<int>(y, x) == label) region_bands.push_back(band_of.at<int>(y, x));
+      }
+    }
+    std::nth_element(region_bands.begin(), region_bands.begin() + region_bands.size() / 2,
+                     region_bands.end());
+    const int k = region_bands[region_bands.size() / 2];
+    const double d_band = std::exp(log_low + (k + 0.5) * band) - offset;
+    const int grow = int(std::ceil(0.5 * options.min_width_m * geometry.focal_px /
+                                   geometry.DepthFromDisparity(d_band))) +
+                     1;
+    const cv::Rect outer = (box + cv::Size(2 * grow, 2 * grow) - cv::Point(grow, grow)) &
+                           cv::Rect(0, 0, disparity.cols, disparity.rows);
+    const cv::Mat region = labels(outer) == label;
+    cv::Mat grown;
+    cv::dilate(region, grown,
+               cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * grow + 1, 2 * grow + 1}));
+    cv::Mat same_surface;
+    cv::inRange(band_of(outer), k - 3, k + 3, same_surface);
+    grown &= same_surface;
+    const cv::Rect grown_box = cv::boundingRect(grown) + outer.tl();
+    if (cv::countNonZero(grown) < options.min_area_px) continue;
+    boxes.push_back(grown_box);
+  }
+
+  // Merge boxes that overlap a lot (one obstacle split into parts, e.g. the two weights of a damper
+  // are not merged unless they overlap).
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (size_t i = 0; i < boxes.size() && !merged; ++i) {
+      for (size_t j = i + 1; j < boxes.size() && !merged; ++j) {
+        const double overlap = (boxes[i] & boxes[j]).area();
+        if (overlap > options.merge_overlap * std::min(boxes[i].area(), boxes[j].area())) {
+          boxes[i] |= boxes[j];
+          boxes.erase(boxes.begin() + long(j));
+          merged = true;
+        }
+      }
+    }
+  }
+  return boxes;
+}
+
+std::vector<RangeResult> RangeAllObstacles(const cv::Mat& disparity, const StereoGeometry& geometry,
+                                           const ObstacleFinderOptions& finder_options,
+                                           const RangingOptions& ranging_options) {
+  std::vector<RangeResult> results;
+  for (const cv::Rect& box : FindObstacleRegions(disparity, geometry, finder_options)) {
+    results.push_back(RangeObstacle(disparity, geometry, box, ranging_options));
+  }
+  std::stable_sort(results.begin(), results.end(), [](const RangeResult& a, const RangeResult& b) {
+    if (a.ok() != b.ok()) return a.ok();
+    return a.distance_m < b.distance_m;
+  });
+  return results;
+}
+
+}  // namespace linesight

@@ -1,0 +1,314 @@
+#include "linesight/ranging/ranging.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+DisparityRange DisparityRangeForDepths(const StereoGeometry& geometry, double z_min_m,
+                                       double z_max_m, int margin_px) {
+  if (!(z_min_m > 0.0) || !std::isfinite(z_min_m)) {
+    throw InputError(fmt::format("minimum depth {} m must be a positive number", z_min_m));
+  }
+  if (!(z_max_m > z_min_m) || !std::isfinite(z_max_m)) {
+    throw InputError(
+        fmt::format("maximum depth {} m must exceed the minimum depth {} m", z_max_m, z_min_m));
+  }
+  LS_CHECK(margin_px >= 0);
+  const int low = std::max(0, int(std::floor(geometry.DisparityFromDepth(z_max_m))) - margin_px);
+  const int high = int(std::ceil(geometry.DisparityFromDepth(z_min_m))) + margin_px;
+  DisparityRange range;
+  range.min_disparity = low;
+  range.num_disparities = std::max(1, high - low + 1);
+  return range;
+}
+
+DisparityRange DisparityRangeForDepths(const StereoCalibration& calib, double z_min_m,
+                                       double z_max_m, int margin_px) {
+  return DisparityRangeForDepths(GeometryFromCalibration(calib), z_min_m, z_max_m, margin_px);
+}
+
+void RangingOptions::Check() const {
+  CheckOption(min_depth_m > 0.0, "RangingOptions.min_depth_m", min_depth_m, "must be > 0");
+  CheckOption(max_depth_m > min_depth_m, "RangingOptions.max_depth_m", max_depth_m,
+              "must exceed min_depth_m");
+  CheckOption(min_valid_pixels >= 1, "RangingOptions.min_valid_pixels", min_valid_pixels,
+              "must be >= 1");
+  CheckOption(min_valid_fraction >= 0.0 && min_valid_fraction <= 1.0,
+              "RangingOptions.min_valid_fraction", min_valid_fraction, "must be in [0, 1]");
+  CheckOption(mode_bin_relative > 0.0 && mode_bin_relative <= 0.5,
+              "RangingOptions.mode_bin_relative", mode_bin_relative, "must be in (0, 0.5]");
+  CheckOption(mode_valley_fraction >= 0.0 && mode_valley_fraction < 1.0,
+              "RangingOptions.mode_valley_fraction", mode_valley_fraction, "must be in [0, 1)");
+  CheckOption(mode_min_support > 0.0 && mode_min_support <= 1.0, "RangingOptions.mode_min_support",
+              mode_min_support, "must be in (0, 1]");
+  CheckOption(smoothing_radius_px >= 0 && smoothing_radius_px <= 15,
+              "RangingOptions.smoothing_radius_px", smoothing_radius_px, "must be in [0, 15]");
+  CheckOption(near_percentile >= 0.5 && near_percentile <= 1.0, "RangingOptions.near_percentile",
+              near_percentile, "must be in [0.5, 1]");
+  CheckOption(disparity_sigma_floor_px >= 0.0, "RangingOptions.disparity_sigma_floor_px",
+              disparity_sigma_floor_px, "must be >= 0");
+  CheckOption(correlation_length_px >= 1.0, "RangingOptions.correlation_length_px",
+              correlation_length_px, "must be >= 1");
+}
+
+void CheckRoi(const cv::Rect& roi, cv::Size image_size) {
+  if (roi.width <= 0 || roi.height <= 0) {
+    throw InputError(fmt::format("ROI {},{},{},{} is empty (width and height must be positive)",
+                                 roi.x, roi.y, roi.width, roi.height));
+  }
+  if (roi.x < 0 || roi.y < 0 || roi.x + roi.width > image_size.width ||
+      roi.y + roi.height > image_size.height) {
+    throw InputError(fmt::format("ROI {},{},{},{} is not inside the {}x{} image", roi.x, roi.y,
+                                 roi.width, roi.height, image_size.width, image_size.height));
+  }
+}
+
+cv::Rect ParseRoi(const std::string& text) {
+  int values[4];
+  const char* p = text.data();
+  const char* end = text.data() + text.size();
+  for (int i = 0; i < 4; ++i) {
+    auto [next, ec] = std::from_chars(p, end, values[i]);
+    const bool separator_ok = i < 3 ? (next < end && *next == ',') : next == end;
+    if (ec != std::errc() || !separator_ok) {
+      throw UsageError(fmt::format("--roi '{}': expected x,y,w,h (four integers in pixels)", text));
+    }
+    p = next + 1;
+  }
+  return {values[0], values[1], values[2], values[3]};
+}
+
+namespace {
+
+double Quantile(std::vector<float> values, double p) {
+  LS_CHECK(!values.empty());
+  const double position = p * double(values.size() - 1);
+  const size_t lo = size_t(std::floor(position));
+  const size_t hi = std::min(values.size() - 1, lo + 1);
+  std::nth_element(values.begin(), values.begin() + lo, values.end());
+  const double a = values[lo];
+  if (hi == lo) return a;
+  const double b = *std::min_element(values.begin() + lo + 1, values.end());
+  return a + (position - double(lo)) * (b - a);
+}
+
+double Median(std::vector<float> values) { return Quantile(std::move(values), 0.5); }
+
+// Standard normal density and quantile (Acklam's rational approximation is more than we need here:
+// a bisection on erfc is exact enough and obviously right).
+double NormalDensity(double z) { return std::exp(-0.5 * z * z) / std::sqrt(2.0 * M_PI); }
+double NormalQuantile(double p) {
+  double lo = -10.0, hi = 10.0;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+RangeResult NoMeasurement(RangeResult result, std::string reason) {
+  result.status = RangeStatus::kNoMeasurement;
+  result.reason = std::move(reason);
+  return result;
+}
+
+}  // namespace
+
+RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geometry,
+                          const cv::Rect& roi, const RangingOptions& options) {
+  options.Check();
+  CheckDisparityMap(disparity, "disparity");
+  CheckRoi(roi, disparity.size());
+  RangeResult result;
+  result.roi = roi;
+
+  // Stage 1: valid disparities inside the working depth range.
+  const double d_low = geometry.DisparityFromDepth(options.max_depth_m);
+  const double d_high = geometry.DisparityFromDepth(options.min_depth_m);
+  const cv::Mat view = disparity(roi);
+  cv::Mat valid(roi.size(), CV_8U, cv::Scalar(0));
+  std::vector<float> values;
+  for (int y = 0; y < view.rows; ++y) {
+    const float* d = view.ptr<float>(y);
+    for (int x = 0; x < view.cols; ++x) {
+      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high &&
+          d[x] + geometry.disparity_offset_px > 0) {
+        valid.at<uchar>(y, x) = 1;
+        values.push_back(d[x]);
+      }
+    }
+  }
+  const int n = int(values.size());
+  result.valid_fraction = double(n) / double(roi.area());
+  if (n == 0) {
+    return NoMeasurement(result, fmt::format("no valid disparity in the ROI for depths {}..{} m",
+                                             options.min_depth_m, options.max_depth_m));
+  }
+  if (n < options.min_valid_pixels || result.valid_fraction < options.min_valid_fraction) {
+    return NoMeasurement(
+        result, fmt::format("only {} valid pixels ({:.1f} % of the ROI); need {} and {:.1f} %", n,
+                            100.0 * result.valid_fraction, options.min_valid_pixels,
+                            100.0 * options.min_valid_fraction));
+  }
+
+  // Stage 2: histogram of log-disparity (bins of equal relative depth width), smoothed with [1 2
+  // 1].
+  const double offset = geometry.disparity_offset_px;
+  auto log_of = [&](double d) { return std::log(d + offset); };
+  const double log_low =
+      log_of(std::max(d_low, double(*std::min_element(values.begin(), values.end()))));
+  const double log_high = log_of(*std::max_element(values.begin(), values.end()));
+  const int bins =
+      std::max(1, int(std::ceil((log_high - log_low) / options.mode_bin_relative)) + 1);
+  std::vector<double> histogram(size_t(bins) + 2, 0.0);  // one empty guard bin at each end
+  auto bin_of = [&](double d) {
+    return 1 + std::clamp(int((log_of(d) - log_low) / options.mode_bin_relative), 0, bins - 1);
+  };
+  for (float d : values) histogram[size_t(bin_of(d))] += 1.0;
+  std::vector<double> smoothed(histogram.size(), 0.0);
+  for (size_t i = 1; i + 1 < histogram.size(); ++i) {
+    smoothed[i] = 0.25 * histogram[i - 1] + 0.5 * histogram[i] + 0.25 * histogram[i + 1];
+  }
+
+  // Stage 3: depth modes = runs of bins above the valley level; the obstacle is the nearest
+  // (largest disparity) mode holding enough of the valid pixels.
+  const double peak = *std::max_element(smoothed.begin(), smoothed.end());
+  const double level = options.mode_valley_fraction * peak;
+  int mode_first = -1, mode_last = -1;
+  for (int i = int(smoothed.size()) - 2; i >= 1 && mode_first < 0; --i) {
+    if (smoothed[size_t(i)] <= level) continue;
+    int j = i;
+    double support = 0.0;
+    while (j >= 1 && smoothed[size_t(j)] > level) support += histogram[size_t(j--)];
+    if (support >= options.mode_min_support * n) {
+      mode_first = j + 1;
+      mode_last = i;
+    }
+    i = j;
+  }
+  if (mode_first < 0) {
+    return NoMeasurement(result, fmt::format("no depth mode holds {:.0f} % of the {} valid pixels",
+                                             100.0 * options.mode_min_support, n));
+  }
+  // Grow by one bin on each side: the valley test on the smoothed histogram cuts tails early.
+  mode_first = std::max(1, mode_first - 1);
+  mode_last = std::min(bins, mode_last + 1);
+
+  cv::Mat obstacle(roi.size(), CV_8U, cv::Scalar(0));
+  std::vector<float> obstacle_values;
+  int min_x = roi.width, min_y = roi.height, max_x = -1, max_y = -1;
+  for (int y = 0; y < view.rows; ++y) {
+    const float* d = view.ptr<float>(y);
+    for (int x = 0; x < view.cols; ++x) {
+      if (!valid.at<uchar>(y, x)) continue;
+      const int b = bin_of(d[x]);
+      if (b < mode_first || b > mode_last) continue;
+      obstacle.at<uchar>(y, x) = 1;
+      obstacle_values.push_back(d[x]);
+      min_x = std::min(min_x, x);
+      max_x = std::max(max_x, x);
+      min_y = std::min(min_y, y);
+      max_y = std::max(max_y, y);
+    }
+  }
+  const int m = int(obstacle_values.size());
+  if (m < options.min_valid_pixels) {
+    return NoMeasurement(result, fmt::format("the nearest depth mode has only {} pixels; need {}",
+                                             m, options.min_valid_pixels));
+  }
+  result.obstacle_pixels = m;
+  result.box = cv::Rect(roi.x + min_x, roi.y + min_y, max_x - min_x + 1, max_y - min_y + 1);
+
+  // Stage 4: local median of the obstacle's disparities (only obstacle pixels vote). The noise
+  // level comes from the residuals against a wider median (radius noise_radius), which also sees
+  // correlated matching errors that a 3x3 neighbourhood would hide.
+  const int r = options.smoothing_radius_px;
+  const int noise_radius = std::max(4, r);
+  std::vector<float> smoothed_values, residuals, window;
+  smoothed_values.reserve(size_t(m));
+  residuals.reserve(size_t(m));
+  auto local_median = [&](int x, int y, int radius) {
+    window.clear();
+    for (int v = std::max(0, y - radius); v <= std::min(view.rows - 1, y + radius); ++v) {
+      for (int u = std::max(0, x - radius); u <= std::min(view.cols - 1, x + radius); ++u) {
+        if (obstacle.at<uchar>(v, u)) window.push_back(view.at<float>(v, u));
+      }
+    }
+    return float(Median(window));
+  };
+  for (int y = 0; y < view.rows; ++y) {
+    for (int x = 0; x < view.cols; ++x) {
+      if (!obstacle.at<uchar>(y, x)) continue;
+      residuals.push_back(view.at<float>(y, x) - local_median(x, y, noise_radius));
+      smoothed_values.push_back(r == 0 ? view.at<float>(y, x) : local_median(x, y, r));
+    }
+  }
+
+  // Stage 5: nearest surface and uncertainty. sigma_d combines (in quadrature) the floor, the
+  // standard error of the percentile (with correlated errors: never below one independent sample of
+  // the tail), and the steepness of the tail (d at the percentile halfway to the maximum minus
+  // d_near), which bounds how far the nearest visible point can lie beyond the percentile.
+  const double p = options.near_percentile;
+  const double d_near = Quantile(smoothed_values, p);
+  const double d_tail = Quantile(smoothed_values, 0.5 * (1.0 + p));
+  for (float& e : residuals) e = std::abs(e);
+  const double sigma_residual = 1.4826 * Median(residuals);
+  const double window_pixels = double((2 * r + 1) * (2 * r + 1));
+  const double correlation_area = options.correlation_length_px * options.correlation_length_px;
+  // Smoothing over a window averages only as many independent errors as fit in it.
+  const double sigma_smoothed =
+      sigma_residual / std::sqrt(std::max(1.0, window_pixels / correlation_area));
+  const double effective_samples = std::max(1.0, double(m) / correlation_area);
+  const double tail_samples = std::max(1.0, (1.0 - p) * double(m) / correlation_area);
+  const double z_p = NormalQuantile(std::min(p, 0.999));
+  const double quantile_error =
+      sigma_smoothed * std::max(std::sqrt(p * (1.0 - p) / effective_samples) / NormalDensity(z_p),
+                                1.0 / std::sqrt(tail_samples));
+  const double tail_step = d_tail - d_near;
+  const double sigma_d =
+      std::sqrt(options.disparity_sigma_floor_px * options.disparity_sigma_floor_px +
+                quantile_error * quantile_error + tail_step * tail_step);
+  result.disparity_px = d_near;
+  result.disparity_sigma_px = sigma_d;
+  result.distance_m = geometry.DepthFromDisparity(d_near);
+  result.sigma_m = geometry.DepthSigma(result.distance_m, sigma_d);
+  result.median_distance_m = geometry.DepthFromDisparity(Median(obstacle_values));
+  result.status = RangeStatus::kOk;
+  return result;
+}
+
+RangeResult RangeObstacle(const cv::Mat& disparity, const StereoCalibration& calib,
+                          const cv::Rect& roi, const RangingOptions& options) {
+  return RangeObstacle(disparity, GeometryFromCalibration(calib), roi, options);
+}
+
+nlohmann::json RangeResultToJson(const RangeResult& result) {
+  nlohmann::json j;
+  j["roi"] = {result.roi.x, result.roi.y, result.roi.width, result.roi.height};
+  j["valid_fraction"] = result.valid_fraction;
+  if (result.ok()) {
+    j["status"] = "ok";
+    j["distance_m"] = result.distance_m;
+    j["sigma_m"] = result.sigma_m;
+    j["box"] = {result.box.x, result.box.y, result.box.width, result.box.height};
+    j["obstacle_pixels"] = result.obstacle_pixels;
+    j["disparity_px"] = result.disparity_px;
+    j["disparity_sigma_px"] = result.disparity_sigma_px;
+    j["median_distance_m"] = result.median_distance_m;
+  } else {
+    j["status"] = "no_measurement";
+    j["reason"] = result.reason;
+    j["distance_m"] = nullptr;
+    j["sigma_m"] = nullptr;
+  }
+  return j;
+}
+
+}  // namespace linesight

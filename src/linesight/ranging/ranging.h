@@ -1,0 +1,103 @@
+// Distance to an obstacle inside a region of interest of a rectified disparity map, with an
+// uncertainty.
+//
+// Definition of the reported distance: the depth Z (metres, along the rectified left optical axis)
+// of the obstacle's NEAREST surface, i.e. min Z over the obstacle's visible surface -- the same
+// definition the synthetic scene uses for its true distances. Estimated as f*B / (d_near + doffs),
+// where d_near is a high percentile (RangingOptions::near_percentile) of the obstacle's
+// median-smoothed disparities.
+//
+// Stages: valid disparities in the working depth range -> log-disparity histogram -> depth modes
+// separated by valleys -> the nearest mode with enough support is the obstacle (what lies behind it
+// in the ROI is dropped)
+// -> local median smoothing -> near percentile -> sigma from the residuals.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "linesight/geometry/depth.h"
+#include "linesight/io/stereo_calibration.h"
+
+namespace linesight {
+
+// Disparity search range of a matcher: [min_disparity, min_disparity + num_disparities - 1].
+struct DisparityRange {
+  int min_disparity = 0;
+  int num_disparities = 0;
+  int max_disparity() const { return min_disparity + num_disparities - 1; }
+};
+
+// The disparity range that covers depths [z_min_m, z_max_m] (plus `margin_px` on both sides, for
+// subpixel interpolation and calibration error): min = floor(fB/z_max - doffs) - margin, max =
+// ceil(fB/z_min - doffs)
+// + margin, min clamped at 0. Throws InputError for z_min <= 0 or z_max <= z_min.
+DisparityRange DisparityRangeForDepths(const StereoGeometry& geometry, double z_min_m,
+                                       double z_max_m, int margin_px = 2);
+DisparityRange DisparityRangeForDepths(const StereoCalibration& calib, double z_min_m,
+                                       double z_max_m, int margin_px = 2);
+
+struct RangingOptions {
+  double min_depth_m = 0.2;          // disparities of nearer points are ignored (m)
+  double max_depth_m = 8.0;          // disparities of farther points are ignored (m)
+  int min_valid_pixels = 20;         // fewer valid pixels in the ROI -> no measurement
+  double min_valid_fraction = 0.01;  // smaller share of valid pixels in the ROI -> no measurement
+  double mode_bin_relative =
+      0.01;  // histogram bin width in ln(d): 0.01 = bins 1 % of the disparity wide
+  // A histogram bin belongs to a depth mode while its (smoothed) count exceeds this fraction of the
+  // largest bin; lower bins separate the obstacle from what lies behind (or in front of) it.
+  double mode_valley_fraction = 0.08;
+  double mode_min_support =
+      0.10;  // share of the valid pixels a mode needs to be taken as the obstacle
+  int smoothing_radius_px =
+      2;  // median of the obstacle's disparities over (2r+1)^2 before the percentile
+  double near_percentile =
+      0.95;  // percentile (0.5..1) of the smoothed disparities taken as nearest surface
+  // Floor of the disparity uncertainty (px): matching bias that no residual reveals (subpixel
+  // locking, foreshortening).
+  double disparity_sigma_floor_px = 0.05;
+  // Spatial correlation of matching errors: residuals of pixels closer than this (px) are not
+  // independent, so the standard error uses n / correlation_length_px^2 samples.
+  double correlation_length_px = 5.0;
+
+  void Check() const;
+};
+
+enum class RangeStatus { kOk, kNoMeasurement };
+
+struct RangeResult {
+  RangeStatus status = RangeStatus::kNoMeasurement;
+  std::string reason;       // why there is no measurement (empty when kOk)
+  cv::Rect roi;             // the region that was searched
+  cv::Rect box;             // bounding box of the obstacle's pixels (empty without a measurement)
+  double distance_m = 0.0;  // nearest-surface depth (see the file comment)
+  double sigma_m = 0.0;     // 1-sigma uncertainty of distance_m
+  double valid_fraction = 0.0;      // share of ROI pixels with a disparity in the working range
+  int obstacle_pixels = 0;          // pixels assigned to the obstacle's depth mode
+  double disparity_px = 0.0;        // d_near
+  double disparity_sigma_px = 0.0;  // uncertainty of d_near
+  double median_distance_m = 0.0;   // depth of the obstacle mode's median disparity (its "centre")
+
+  bool ok() const { return status == RangeStatus::kOk; }
+};
+
+// Ranges the obstacle in `roi` of a rectified left disparity map (CV_32FC1, +inf invalid). Throws
+// InputError when the ROI is empty or not inside the image, or the disparity holds NaN/-inf.
+// Returns kNoMeasurement with a reason when the ROI holds too little valid disparity.
+RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geometry,
+                          const cv::Rect& roi, const RangingOptions& options);
+RangeResult RangeObstacle(const cv::Mat& disparity, const StereoCalibration& calib,
+                          const cv::Rect& roi, const RangingOptions& options);
+
+// Throws InputError ("ROI 700,10,100,50 is not inside the 752x480 image") unless roi is non-empty
+// and inside.
+void CheckRoi(const cv::Rect& roi, cv::Size image_size);
+// "x,y,w,h" -> cv::Rect; throws UsageError naming the text.
+cv::Rect ParseRoi(const std::string& text);
+
+nlohmann::json RangeResultToJson(const RangeResult& result);
+
+}  // namespace linesight

@@ -1,0 +1,117 @@
+#include "linesight/ranging/ranging.h"
+
+#include <gtest/gtest.h>
+
+#include "linesight/core/error.h"
+#include "linesight/ranging/ranging_test_util.h"
+
+namespace linesight {
+namespace {
+
+using testing::SphereScene;
+using testing::TestGeometry;
+
+TEST(RangingOptionsTest, DefaultsAreValid) { EXPECT_NO_THROW(RangingOptions{}.Check()); }
+
+TEST(RangingOptionsTest, Boundaries) {
+  EXPECT_THROW((RangingOptions{.min_depth_m = 0.0}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.min_depth_m = 2.0, .max_depth_m = 1.0}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.min_valid_pixels = 0}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.mode_min_support = 0.0}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.near_percentile = 0.4}.Check()), OptionError);
+  EXPECT_NO_THROW((RangingOptions{.near_percentile = 1.0}.Check()));
+  EXPECT_THROW((RangingOptions{.smoothing_radius_px = -1}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.correlation_length_px = 0.5}.Check()), OptionError);
+}
+
+TEST(DisparityRangeTest, CoversTheWorkingRange) {
+  // f B = 736 * 0.119 = 87.584 px m: 6 m -> 14.6 px, 0.3 m -> 291.9 px.
+  const DisparityRange range = DisparityRangeForDepths(TestGeometry(), 0.3, 6.0, 2);
+  EXPECT_EQ(range.min_disparity, 12);
+  EXPECT_EQ(range.max_disparity(), 294);
+  EXPECT_EQ(range.num_disparities, 283);
+  const DisparityRange exact = DisparityRangeForDepths(TestGeometry(), 1.0, 2.0, 0);
+  EXPECT_EQ(exact.min_disparity, 43);
+  EXPECT_EQ(exact.max_disparity(), 88);
+  EXPECT_THROW(DisparityRangeForDepths(TestGeometry(), 0.0, 6.0), InputError);
+  EXPECT_THROW(DisparityRangeForDepths(TestGeometry(), 3.0, 2.0), InputError);
+}
+
+TEST(ParseRoiTest, ParsesAndRejects) {
+  EXPECT_EQ(ParseRoi("10,20,30,40"), cv::Rect(10, 20, 30, 40));
+  EXPECT_THROW(ParseRoi("10,20,30"), UsageError);
+  EXPECT_THROW(ParseRoi("10,20,30,40,5"), UsageError);
+  EXPECT_THROW(ParseRoi("a,b,c,d"), UsageError);
+}
+
+TEST(RangingTest, RejectsBadRoiAndBadDisparity) {
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(30.0f));
+  try {
+    RangeObstacle(d, TestGeometry(), {300, 10, 40, 40}, {});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ROI 300,10,40,40 is not inside the 320x240 image"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(RangeObstacle(d, TestGeometry(), {10, 10, 0, 40}, {}), InputError);
+  EXPECT_THROW(RangeObstacle(d, TestGeometry(), {-1, 10, 5, 5}, {}), InputError);
+  d.at<float>(50, 50) = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(RangeObstacle(d, TestGeometry(), {10, 10, 40, 40}, {}), InputError);
+}
+
+TEST(RangingTest, NoMeasurementWithoutValidDisparity) {
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(kInvalidDisparity));
+  const RangeResult r = RangeObstacle(d, TestGeometry(), {10, 10, 40, 40}, {});
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.reason.find("no valid disparity"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.valid_fraction, 0.0);
+  EXPECT_TRUE(RangeResultToJson(r)["distance_m"].is_null());
+  // Everything beyond the working range counts as invalid too.
+  d.setTo(2.0f);  // 43.8 m
+  EXPECT_FALSE(RangeObstacle(d, TestGeometry(), {10, 10, 40, 40}, {}).ok());
+}
+
+TEST(RangingTest, NoisefreeFlatTargetIsExact) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  d(cv::Rect(100, 80, 60, 50)).setTo(float(g.DisparityFromDepth(2.5)));
+  d(cv::Rect(100, 130, 60, 40))
+      .setTo(float(g.DisparityFromDepth(3.5)));  // background inside the ROI
+  const RangeResult r = RangeObstacle(d, g, {90, 70, 80, 100}, {});
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_NEAR(r.distance_m, 2.5, 1e-5);
+  EXPECT_EQ(r.box, cv::Rect(100, 80, 60, 50));
+  EXPECT_EQ(r.obstacle_pixels, 60 * 50);
+  EXPECT_NEAR(r.valid_fraction, 60.0 * 90 / (80 * 100),
+              1e-12);  // obstacle and background are valid
+  // Noise-free: sigma is the floor only.
+  EXPECT_NEAR(r.sigma_m, g.DepthSigma(2.5, RangingOptions{}.disparity_sigma_floor_px), 1e-9);
+}
+
+// Sphere in front of a background plane with a conductor crossing the ROI and correlated matching
+// noise: mean relative error <= 1 % and the truth within +-2 sigma in >= 90 % of 40 runs, at
+// several distances.
+TEST(RangingTest, SphereDistanceIsAccurateAndSigmaIsCalibrated) {
+  const StereoGeometry g = TestGeometry();
+  for (double distance : {0.8, 2.0, 4.0}) {
+    const double radius = 0.06;
+    double sum_error = 0.0;
+    int covered = 0, runs = 40;
+    for (int seed = 0; seed < runs; ++seed) {
+      cv::Rect box;
+      const cv::Mat d =
+          SphereScene(g, distance, radius, {170, 110}, distance + 0.8, 0.15, unsigned(seed), &box);
+      const cv::Rect roi = (box + cv::Size(30, 30) - cv::Point(15, 15)) & cv::Rect(0, 0, 320, 240);
+      const RangeResult r = RangeObstacle(d, g, roi, {});
+      ASSERT_TRUE(r.ok()) << r.reason;
+      sum_error += (r.distance_m - distance) / distance;
+      covered += std::abs(r.distance_m - distance) <= 2.0 * r.sigma_m;
+    }
+    EXPECT_LT(std::abs(sum_error / runs), 0.01) << "at " << distance << " m";
+    EXPECT_GE(covered, int(0.85 * runs)) << "at " << distance << " m";
+  }
+}
+
+}  // namespace
+}  // namespace linesight
