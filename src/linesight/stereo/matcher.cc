@@ -9,6 +9,7 @@
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/stereo/opencv_matchers.h"
+#include "linesight/stereo/sgm.h"
 
 namespace linesight {
 
@@ -22,7 +23,7 @@ void MatcherOptions::Check() const {
   CheckOption(threads >= 0, "MatcherOptions.threads", threads, "must be >= 0 (0 = all cores)");
 }
 
-std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls"}; }
+std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm"}; }
 
 std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
                                              const MatcherOptions& options) {
@@ -35,6 +36,8 @@ std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
     matcher = CreateOpenCvSgbm(options, params);
   } else if (method == "sgbm-wls") {
     matcher = CreateOpenCvSgbmWls(options, params);
+  } else if (method == "sgm") {
+    matcher = CreateSgmMatcher(options, params);
   } else {
     throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
                                  fmt::join(MatcherNames(), ", ")));

@@ -1,0 +1,501 @@
+// SIMD kernels of the SGM pipeline, compiled once per Highway target (foreach_target) and dispatched at run
+// time. Every kernel is defined in integers only, so all targets produce bit-identical results;
+// sgm_reference_test.cc checks each against a naive scalar reference for every target the CPU supports.
+
+#include <algorithm>
+#include <cstring>
+#include <thread>
+
+#include "linesight/core/error.h"
+#include "linesight/stereo/sgm_stages.h"
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "linesight/stereo/sgm_kernels.cc"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace linesight::detail {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+const char* TargetNameImpl() { return hwy::TargetName(HWY_TARGET); }
+
+// ------------------------------------------------------------------------------------------------ census
+// `padded`: rows [row_begin - ry, row_end + ry) of the image with rx replicated columns on each side and at
+// least one vector of slack after them; row r of the image is padded row r - (row_begin - ry).
+void CensusRowsImpl(const uint8_t* padded, size_t stride, int width, const int* offset_dy,
+                    const int* offset_dx, int num_bits, int rx, int ry, int row_begin, int row_end,
+                    uint8_t* planes /* 8 x stride */, uint64_t* codes) {
+  const hn::ScalableTag<uint8_t> d8;
+  const size_t n8 = hn::Lanes(d8);
+  const auto zero = hn::Zero(d8);
+  const int num_groups = (num_bits + 7) / 8;
+  for (int y = row_begin; y < row_end; ++y) {
+    const uint8_t* centre_row = padded + static_cast<size_t>(y - row_begin + ry) * stride + rx;
+    for (int x0 = 0; x0 < width; x0 += static_cast<int>(n8)) {
+      const auto centre = hn::LoadU(d8, centre_row + x0);
+      for (int g = 0; g < num_groups; ++g) {
+        auto acc = zero;
+        for (int bit = 0; bit < 8 && g * 8 + bit < num_bits; ++bit) {
+          const int b = g * 8 + bit;
+          const auto neighbour =
+              hn::LoadU(d8, centre_row + static_cast<ptrdiff_t>(offset_dy[b]) * static_cast<ptrdiff_t>(stride) +
+                                x0 + offset_dx[b]);
+          acc = hn::Or(acc, hn::IfThenElseZero(hn::Lt(neighbour, centre),
+                                               hn::Set(d8, static_cast<uint8_t>(1u << bit))));
+        }
+        hn::StoreU(acc, d8, planes + static_cast<size_t>(g) * stride + x0);
+      }
+    }
+    uint64_t* out = codes + static_cast<size_t>(y) * width;
+    for (int x = 0; x < width; ++x) {
+      uint64_t code = 0;
+      for (int g = 0; g < num_groups; ++g) {
+        code |= static_cast<uint64_t>(planes[static_cast<size_t>(g) * stride + x]) << (8 * g);
+      }
+      out[x] = code;
+    }
+  }
+}
+
+// ------------------------------------------------------------------------------------------ matching cost
+// Per-row context of the matching cost: the right census and BT values stored in reverse, so that for a left
+// pixel x the right pixels x - min_disparity - k for k = 0, 1, ... are contiguous from index width-1-x.
+struct CostRowContext {
+  const CostInput* input = nullptr;
+  int padded = 0;
+  int max_cost = 0;
+  const uint64_t* census_left = nullptr;  // row y
+  const uint64_t* census_reversed = nullptr;
+  const uint16_t* bt_left = nullptr;      // 3 * width: 2I, min2, max2
+  const uint16_t* bt_reversed = nullptr;  // 3 * reversed_size
+  size_t reversed_size = 0;
+};
+
+// Index i of the reversed arrays holds right pixel xr = width - 1 - min_disparity - i.
+inline size_t ReversedSize(const CostInput& in, int padded) {
+  return static_cast<size_t>(in.width) + padded + 64;
+}
+
+void PrepareCostRow(const CostInput& in, int y, int padded, AlignedVector<uint64_t>* census_reversed,
+                    AlignedVector<uint16_t>* bt_reversed, AlignedVector<uint16_t>* bt_left,
+                    CostRowContext* ctx) {
+  const int w = in.width;
+  const size_t n = ReversedSize(in, padded);
+  census_reversed->assign(n, 0);
+  const uint64_t* census_right = in.census_right + static_cast<size_t>(y) * w;
+  for (size_t i = 0; i < n; ++i) {
+    const long xr = static_cast<long>(w) - 1 - in.min_disparity - static_cast<long>(i);
+    if (xr >= 0 && xr < w) (*census_reversed)[i] = census_right[xr];
+  }
+  ctx->input = &in;
+  ctx->padded = padded;
+  ctx->max_cost = MaxMatchingCost(in);
+  ctx->census_left = in.census_left + static_cast<size_t>(y) * w;
+  ctx->census_reversed = census_reversed->data();
+  ctx->reversed_size = n;
+  if (in.bt_weight > 0) {
+    // Birchfield–Tomasi in half grey levels: 2I and the min / max of 2I and the two half-pixel interpolations.
+    auto fill = [w](const uint8_t* row, int x, uint16_t* i2, uint16_t* mn, uint16_t* mx) {
+      const int c = row[x];
+      const int minus = c + row[std::max(x - 1, 0)];
+      const int plus = c + row[std::min(x + 1, w - 1)];
+      *i2 = static_cast<uint16_t>(2 * c);
+      *mn = static_cast<uint16_t>(std::min({2 * c, minus, plus}));
+      *mx = static_cast<uint16_t>(std::max({2 * c, minus, plus}));
+    };
+    bt_left->resize(3 * static_cast<size_t>(w));
+    const uint8_t* left_row = in.gray_left + static_cast<size_t>(y) * w;
+    for (int x = 0; x < w; ++x) {
+      fill(left_row, x, &(*bt_left)[x], &(*bt_left)[w + x], &(*bt_left)[2 * w + x]);
+    }
+    bt_reversed->assign(3 * n, 0);
+    const uint8_t* right_row = in.gray_right + static_cast<size_t>(y) * w;
+    for (size_t i = 0; i < n; ++i) {
+      const long xr = static_cast<long>(w) - 1 - in.min_disparity - static_cast<long>(i);
+      if (xr >= 0 && xr < w) {
+        fill(right_row, static_cast<int>(xr), &(*bt_reversed)[i], &(*bt_reversed)[n + i],
+             &(*bt_reversed)[2 * n + i]);
+      }
+    }
+    ctx->bt_left = bt_left->data();
+    ctx->bt_reversed = bt_reversed->data();
+  }
+}
+
+// Costs of pixel x for k in [0, padded) into out.
+HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, uint16_t* HWY_RESTRICT out) {
+  const CostInput& in = *ctx.input;
+  const int padded = ctx.padded;
+  const size_t base = static_cast<size_t>(in.width - 1 - x);
+  {
+    const hn::ScalableTag<uint64_t> d64;
+    const hn::Rebind<uint16_t, decltype(d64)> d16h;
+    const size_t n64 = hn::Lanes(d64);
+    const auto left = hn::Set(d64, ctx.census_left[x]);
+    for (int k = 0; k < padded; k += static_cast<int>(n64)) {
+      const auto right = hn::LoadU(d64, ctx.census_reversed + base + k);
+      const auto hamming = hn::PopulationCount(hn::Xor(left, right));
+      hn::StoreU(hn::TruncateTo(d16h, hamming), d16h, out + k);
+    }
+  }
+  if (in.bt_weight > 0) {
+    const hn::ScalableTag<uint16_t> d16;
+    const size_t n16 = hn::Lanes(d16);
+    const size_t n = ctx.reversed_size;
+    const auto il = hn::Set(d16, ctx.bt_left[x]);
+    const auto il_min = hn::Set(d16, ctx.bt_left[in.width + x]);
+    const auto il_max = hn::Set(d16, ctx.bt_left[2 * in.width + x]);
+    const auto truncation = hn::Set(d16, static_cast<uint16_t>(2 * in.bt_truncation));
+    const auto weight = hn::Set(d16, static_cast<uint16_t>(in.bt_weight));
+    for (int k = 0; k < padded; k += static_cast<int>(n16)) {
+      const auto ir = hn::LoadU(d16, ctx.bt_reversed + base + k);
+      const auto ir_min = hn::LoadU(d16, ctx.bt_reversed + n + base + k);
+      const auto ir_max = hn::LoadU(d16, ctx.bt_reversed + 2 * n + base + k);
+      const auto left_to_right = hn::Max(hn::SaturatedSub(il, ir_max), hn::SaturatedSub(ir_min, il));
+      const auto right_to_left = hn::Max(hn::SaturatedSub(ir, il_max), hn::SaturatedSub(il_min, ir));
+      const auto bt = hn::Min(hn::Min(left_to_right, right_to_left), truncation);
+      const auto term = hn::ShiftRight<4>(hn::Mul(bt, weight));
+      hn::StoreU(hn::Add(hn::LoadU(d16, out + k), term), d16, out + k);
+    }
+  }
+  // Disparities whose right pixel leaves the image: x - min_disparity - k < 0 or >= width.
+  const uint16_t max_cost = static_cast<uint16_t>(ctx.max_cost);
+  const int num = in.num_disparities;
+  const int first_left_out = std::max(0, x - in.min_disparity + 1);
+  for (int k = first_left_out; k < num; ++k) out[k] = max_cost;
+  const int last_right_out = std::min(num, x - in.min_disparity - in.width + 1);
+  for (int k = 0; k < last_right_out; ++k) out[k] = max_cost;
+}
+
+void MatchingCostRowImpl(const CostInput& in, int y, uint16_t* out) {
+  const int padded = PaddedDisparities(in.num_disparities);
+  AlignedVector<uint64_t> census_reversed;
+  AlignedVector<uint16_t> bt_reversed, bt_left;
+  CostRowContext ctx;
+  PrepareCostRow(in, y, padded, &census_reversed, &bt_reversed, &bt_left, &ctx);
+  for (int x = 0; x < in.width; ++x) PixelCost(ctx, x, out + static_cast<size_t>(x) * padded);
+}
+
+// ------------------------------------------------------------------------------------------ aggregation
+// Path buffers of one sweep: for each of the three paths that come from the previous row (vertical, diagonal,
+// anti-diagonal) two rows (by parity of the sweep step) of `width` slots, plus two slots of the horizontal
+// path; each slot holds kSgmLaneAlign guard lanes, `padded` lanes, kSgmLaneAlign guard lanes.
+struct SweepLayout {
+  int width = 0;
+  int padded = 0;
+  size_t slot = 0;  // lanes per slot
+  size_t RowBuffer(int path, int parity) const {
+    return (static_cast<size_t>(path) * 2 + parity) * width * slot;
+  }
+  size_t Horizontal(int parity) const { return 6 * static_cast<size_t>(width) * slot + parity * slot; }
+  size_t Minima(int path, int parity) const {  // into the minima area after the slots
+    return (static_cast<size_t>(path) * 2 + parity) * width;
+  }
+  size_t TotalLanes() const { return 6 * static_cast<size_t>(width) * slot + 2 * slot; }
+};
+
+SweepLayout MakeLayout(int width, int num_disparities) {
+  SweepLayout layout;
+  layout.width = width;
+  layout.padded = PaddedDisparities(num_disparities);
+  layout.slot = static_cast<size_t>(layout.padded) + 2 * kSgmLaneAlign;
+  return layout;
+}
+
+struct PathStep {
+  const uint16_t* prev = nullptr;  // previous L of this path (data lanes), nullptr at the start of the path
+  uint16_t prev_min = 0;
+  uint16_t p2 = 0;
+  uint16_t* cur = nullptr;
+  uint16_t* cur_min = nullptr;
+};
+
+// One pixel: computes L for `num` paths from the pixel's costs, stores them and their minima, and stores or
+// adds their sum into `sum`.
+HWY_INLINE void AggregatePixel(const uint16_t* HWY_RESTRICT cost, PathStep* steps, int num, int padded,
+                               int num_disparities, uint16_t p1, bool add, uint16_t* HWY_RESTRICT sum) {
+  const hn::ScalableTag<uint16_t> d;
+  const size_t n = hn::Lanes(d);
+  const auto p1v = hn::Set(d, p1);
+  const auto sentinel = hn::Set(d, kSgmPathSentinel);
+  auto minima0 = sentinel, minima1 = sentinel, minima2 = sentinel, minima3 = sentinel;
+  for (int k = 0; k < padded; k += static_cast<int>(n)) {
+    const auto c = hn::LoadU(d, cost + k);
+    const bool partial = k + static_cast<int>(n) > num_disparities;
+    const auto valid = hn::FirstN(d, num_disparities > k ? static_cast<size_t>(num_disparities - k) : 0);
+    auto acc = hn::Zero(d);
+    for (int p = 0; p < num; ++p) {
+      const PathStep& s = steps[p];
+      auto l = c;
+      if (s.prev != nullptr) {
+        const auto same = hn::LoadU(d, s.prev + k);
+        const auto below = hn::LoadU(d, s.prev + k - 1);
+        const auto above = hn::LoadU(d, s.prev + k + 1);
+        const auto prev_min = hn::Set(d, s.prev_min);
+        auto best = hn::Min(same, hn::SaturatedAdd(hn::Min(below, above), p1v));
+        best = hn::Min(best, hn::Set(d, static_cast<uint16_t>(s.prev_min + s.p2)));
+        l = hn::Add(c, hn::Sub(best, prev_min));
+      }
+      if (partial) l = hn::IfThenElse(valid, l, sentinel);
+      hn::StoreU(l, d, s.cur + k);
+      acc = hn::SaturatedAdd(acc, l);
+      switch (p) {
+        case 0: minima0 = hn::Min(minima0, l); break;
+        case 1: minima1 = hn::Min(minima1, l); break;
+        case 2: minima2 = hn::Min(minima2, l); break;
+        default: minima3 = hn::Min(minima3, l); break;
+      }
+    }
+    if (add) acc = hn::SaturatedAdd(acc, hn::LoadU(d, sum + k));
+    hn::StoreU(acc, d, sum + k);
+  }
+  const decltype(minima0) minima[4] = {minima0, minima1, minima2, minima3};
+  for (int p = 0; p < num; ++p) *steps[p].cur_min = hn::GetLane(hn::MinOfLanes(d, minima[p]));
+}
+
+// Sweep steps [step_begin, step_end): step t is row t (forward) or row height-1-t (backward). Forward paths come
+// from the left, top, top-left and top-right; backward paths from the right, bottom, bottom-right, bottom-left.
+void SweepImpl(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
+               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch,
+               const std::function<void(int)>* row_done) {
+  const CostInput& cin = in.cost;
+  const int w = cin.width, h = cin.height;
+  const SweepLayout layout = MakeLayout(w, cin.num_disparities);
+  const int padded = layout.padded;
+  const size_t minima_lanes = 6 * static_cast<size_t>(w);
+  const size_t total = layout.TotalLanes() + minima_lanes + 2 + padded;
+  if (step_begin == 0 || scratch->buffers.size() != total) {
+    scratch->buffers.assign(total, kSgmPathSentinel);
+  }
+  uint16_t* base = scratch->buffers.data();
+  uint16_t* minima = base + layout.TotalLanes();
+  uint16_t* horizontal_min = minima + minima_lanes;  // 2 entries
+  uint16_t* cost = horizontal_min + 2;               // padded lanes
+  const int guard = kSgmLaneAlign;
+  const bool diagonals = in.num_paths == 8;
+  const uint16_t p1 = static_cast<uint16_t>(in.p1);
+  CostRowContext ctx;
+  for (int t = step_begin; t < step_end; ++t) {
+    const int y = direction > 0 ? t : h - 1 - t;
+    const int prev_y = y - direction;
+    const int cur_parity = t & 1, prev_parity = 1 - cur_parity;
+    PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed, &scratch->bt_left, &ctx);
+    const uint8_t* gray = cin.gray_left + static_cast<size_t>(y) * w;
+    const uint8_t* gray_prev = t > 0 ? cin.gray_left + static_cast<size_t>(prev_y) * w : nullptr;
+    uint16_t* sum_row = sum->Row(y);
+    for (int i = 0; i < w; ++i) {
+      const int x = direction > 0 ? i : w - 1 - i;
+      PixelCost(ctx, x, cost);
+      PathStep steps[4];
+      int num = 0;
+      // Horizontal path from x - direction.
+      {
+        PathStep& s = steps[num++];
+        const int hp = i & 1;
+        s.cur = base + layout.Horizontal(hp) + guard;
+        s.cur_min = &horizontal_min[hp];
+        if (i > 0) {
+          s.prev = base + layout.Horizontal(1 - hp) + guard;
+          s.prev_min = horizontal_min[1 - hp];
+          s.p2 = p2_table[std::abs(gray[x] - gray[x - direction])];
+        }
+      }
+      // Paths from the previous row: vertical (dx = 0), diagonal (dx = -direction), anti-diagonal (+direction).
+      const int num_row_paths = diagonals ? 3 : 1;
+      for (int p = 0; p < num_row_paths; ++p) {
+        const int dx = p == 0 ? 0 : (p == 1 ? -direction : direction);
+        PathStep& s = steps[num++];
+        s.cur = base + layout.RowBuffer(p, cur_parity) + static_cast<size_t>(x) * layout.slot + guard;
+        s.cur_min = minima + layout.Minima(p, cur_parity) + x;
+        const int px = x + dx;
+        if (t > 0 && px >= 0 && px < w) {
+          s.prev = base + layout.RowBuffer(p, prev_parity) + static_cast<size_t>(px) * layout.slot + guard;
+          s.prev_min = minima[layout.Minima(p, prev_parity) + px];
+          s.p2 = p2_table[std::abs(gray[x] - gray_prev[px])];
+        }
+      }
+      AggregatePixel(cost, steps, num, padded, cin.num_disparities, p1, add,
+                     sum_row + static_cast<size_t>(x) * padded);
+    }
+    if (row_done != nullptr && *row_done) (*row_done)(y);
+  }
+}
+
+// ------------------------------------------------------------------------------------- winner-takes-all
+void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_disparities, int min_disparity,
+                           WtaRow out, uint16_t* right_cost_scratch) {
+  const hn::ScalableTag<uint16_t> d;
+  const size_t n = hn::Lanes(d);
+  const int padded = PaddedDisparities(num_disparities);
+  const size_t reversed = static_cast<size_t>(width) + padded + 64;
+  uint16_t* right_cost = right_cost_scratch;
+  uint16_t* right_best = right_cost_scratch + reversed;
+  std::fill(right_cost, right_cost + reversed, uint16_t{0xFFFF});
+  std::fill(right_best, right_best + reversed, uint16_t{0xFFFF});
+  const auto all_ones = hn::Set(d, uint16_t{0xFFFF});
+  const auto two = hn::Set(d, uint16_t{2});
+  for (int x = 0; x < width; ++x) {
+    const uint16_t* s = sum_row + static_cast<size_t>(x) * padded;
+    auto mn = all_ones;
+    for (int k = 0; k < padded; k += static_cast<int>(n)) mn = hn::Min(mn, hn::LoadU(d, s + k));
+    const auto best_cost_v = hn::MinOfLanes(d, mn);
+    const uint16_t best_cost = hn::GetLane(best_cost_v);
+    int best = 0;
+    for (int k = 0; k < padded; k += static_cast<int>(n)) {
+      const intptr_t idx = hn::FindFirstTrue(d, hn::Eq(hn::LoadU(d, s + k), best_cost_v));
+      if (idx >= 0) {
+        best = k + static_cast<int>(idx);
+        break;
+      }
+    }
+    // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are excluded.
+    const auto low = hn::Set(d, static_cast<uint16_t>(best - 1));
+    auto second = all_ones;
+    for (int k = 0; k < padded; k += static_cast<int>(n)) {
+      auto v = hn::LoadU(d, s + k);
+      if (k <= best + 1 && best - 1 < k + static_cast<int>(n)) {
+        const auto offset = hn::Sub(hn::Iota(d, static_cast<uint16_t>(k)), low);
+        v = hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), all_ones, v);
+      }
+      second = hn::Min(second, v);
+    }
+    out.best[x] = static_cast<int16_t>(best);
+    out.best_cost[x] = best_cost;
+    out.second_cost[x] = hn::GetLane(hn::MinOfLanes(d, second));
+    // Right view: index i = width - 1 - x + k holds right pixel width - 1 - min_disparity - i.
+    uint16_t* rc = right_cost + (width - 1 - x);
+    uint16_t* rb = right_best + (width - 1 - x);
+    for (int k = 0; k < padded; k += static_cast<int>(n)) {
+      const auto v = hn::LoadU(d, s + k);
+      const auto old = hn::LoadU(d, rc + k);
+      const auto better = hn::Lt(v, old);
+      hn::StoreU(hn::Min(v, old), d, rc + k);
+      hn::StoreU(hn::IfThenElse(better, hn::Iota(d, static_cast<uint16_t>(k)), hn::LoadU(d, rb + k)), d, rb + k);
+    }
+  }
+  for (int xr = 0; xr < width; ++xr) {
+    const long i = static_cast<long>(width) - 1 - min_disparity - xr;
+    int16_t value = -1;
+    if (i >= 0 && i < static_cast<long>(reversed) && right_cost[i] != 0xFFFF) {
+      value = static_cast<int16_t>(right_best[i]);
+    }
+    out.right_best[xr] = value;
+  }
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace linesight::detail
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace linesight::detail {
+
+HWY_EXPORT(TargetNameImpl);
+HWY_EXPORT(CensusRowsImpl);
+HWY_EXPORT(MatchingCostRowImpl);
+HWY_EXPORT(SweepImpl);
+HWY_EXPORT(WinnerTakesAllRowImpl);
+
+std::string DispatchedTargetName() { return HWY_DYNAMIC_DISPATCH(TargetNameImpl)(); }
+
+void CensusTransform(const cv::Mat& gray, int window_width, int window_height, int row_begin, int row_end,
+                     uint64_t* codes) {
+  LS_CHECK(gray.type() == CV_8UC1);
+  LS_CHECK(window_width % 2 == 1 && window_height % 2 == 1);
+  LS_CHECK(window_width * window_height - 1 <= 64);
+  if (row_begin >= row_end) return;
+  const int w = gray.cols, h = gray.rows;
+  const int rx = window_width / 2, ry = window_height / 2;
+  std::vector<int> offset_dy, offset_dx;
+  for (int dy = -ry; dy <= ry; ++dy) {
+    for (int dx = -rx; dx <= rx; ++dx) {
+      if (dy == 0 && dx == 0) continue;
+      offset_dy.push_back(dy);
+      offset_dx.push_back(dx);
+    }
+  }
+  const size_t stride = static_cast<size_t>(w) + 2 * rx + 64 + 64;
+  const int rows = row_end - row_begin + 2 * ry;
+  AlignedVector<uint8_t> padded(stride * rows, 0);
+  for (int r = 0; r < rows; ++r) {
+    const int src_y = std::clamp(row_begin - ry + r, 0, h - 1);
+    const uint8_t* src = gray.ptr<uint8_t>(src_y);
+    uint8_t* dst = padded.data() + static_cast<size_t>(r) * stride;
+    for (int i = 0; i < rx; ++i) {
+      dst[i] = src[0];
+      dst[rx + w + i] = src[w - 1];
+    }
+    std::memcpy(dst + rx, src, static_cast<size_t>(w));
+  }
+  AlignedVector<uint8_t> planes(8 * stride, 0);
+  HWY_DYNAMIC_DISPATCH(CensusRowsImpl)
+  (padded.data(), stride, w, offset_dy.data(), offset_dx.data(), static_cast<int>(offset_dy.size()), rx, ry,
+   row_begin, row_end, planes.data(), codes);
+}
+
+int MaxMatchingCost(const CostInput& input) {
+  return input.census_bits + (input.bt_weight * 2 * input.bt_truncation) / 16;
+}
+
+void MatchingCostRow(const CostInput& input, int y, uint16_t* out) {
+  HWY_DYNAMIC_DISPATCH(MatchingCostRowImpl)(input, y, out);
+}
+
+void SumVolume::Resize(int w, int h, int d) {
+  width = w;
+  height = h;
+  num_disparities = d;
+  padded = PaddedDisparities(d);
+  const size_t lanes = static_cast<size_t>(w) * h * padded;
+  if (data.size() != lanes) {
+    data = AlignedVector<uint16_t>();
+    data.resize(lanes);
+  }
+}
+
+void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, SweepScratch* forward,
+                    SweepScratch* backward, const std::function<void(int)>& row_done) {
+  LS_CHECK(input.num_paths == 4 || input.num_paths == 8);
+  LS_CHECK(MaxMatchingCost(input.cost) + input.p2 <= kSgmMaxPathCost);
+  const int h = input.cost.height;
+  sum->Resize(input.cost.width, h, input.cost.num_disparities);
+  uint16_t p2_table[256];
+  for (int g = 0; g < 256; ++g) {
+    int p2 = input.p2;
+    if (input.p2_gradient_alpha > 0) {
+      p2 = std::max(input.p1 + 1, input.p2 * input.p2_gradient_alpha / (input.p2_gradient_alpha + g));
+    }
+    p2_table[g] = static_cast<uint16_t>(p2);
+  }
+  const auto sweep = HWY_DYNAMIC_DISPATCH(SweepImpl);
+  const std::function<void(int)>* done = row_done ? &row_done : nullptr;
+  if (threads <= 1 || h < 2) {
+    sweep(input, +1, 0, h, false, p2_table, sum, forward, nullptr);
+    sweep(input, -1, 0, h, true, p2_table, sum, backward, done);
+    return;
+  }
+  // Phase 1: each sweep writes its first half of the rows; phase 2: each adds into the other half, which the
+  // opposite sweep has finished, so every row is final as soon as the second sweep leaves it.
+  const int mid = h / 2;
+  {
+    std::thread worker([&] { sweep(input, -1, 0, h - mid, false, p2_table, sum, backward, nullptr); });
+    sweep(input, +1, 0, mid, false, p2_table, sum, forward, nullptr);
+    worker.join();
+  }
+  {
+    std::thread worker([&] { sweep(input, -1, h - mid, h, true, p2_table, sum, backward, done); });
+    sweep(input, +1, mid, h, true, p2_table, sum, forward, done);
+    worker.join();
+  }
+}
+
+void WinnerTakesAllRow(const uint16_t* sum_row, int width, int num_disparities, int min_disparity, WtaRow out,
+                       uint16_t* right_cost_scratch) {
+  HWY_DYNAMIC_DISPATCH(WinnerTakesAllRowImpl)
+  (sum_row, width, num_disparities, min_disparity, out, right_cost_scratch);
+}
+
+}  // namespace linesight::detail
+#endif  // HWY_ONCE

@@ -1,0 +1,471 @@
+// Naive scalar references of every optimised SGM stage (CONVENTIONS.md §7), and exact comparisons with the
+// SIMD kernels for every Highway target this CPU supports, on awkward sizes, disparity ranges, path counts
+// and thread counts.
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <tuple>
+#include <vector>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <hwy/tests/hwy_gtest.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/disparity.h"
+#include "linesight/stereo/sgm.h"
+#include "linesight/stereo/sgm_stages.h"
+
+namespace linesight {
+namespace {
+
+using detail::kSgmInvalidFixed;
+
+// ------------------------------------------------------------------------------------------ test images
+// A textured pair with a slanted disparity plane plus a nearer box, seeded; `width` x `height`.
+void MakePair(int width, int height, double d0, uint64_t seed, cv::Mat* left, cv::Mat* right) {
+  cv::RNG rng(seed);
+  cv::Mat noise(height / 2 + 2, width / 2 + 40, CV_8UC1);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat texture;
+  cv::resize(noise, texture, cv::Size(noise.cols * 2, noise.rows * 2), 0, 0, cv::INTER_CUBIC);
+  *left = texture(cv::Rect(40, 0, width, height)).clone();
+  right->create(height, width, CV_8UC1);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      const bool box = x > width / 3 && x < width / 2 && y > height / 3 && y < height * 2 / 3;
+      const double d = d0 + 0.02 * x + 0.01 * y + (box ? 6 : 0);
+      const int src = static_cast<int>(std::lround(x + d)) + 40;
+      right->at<uint8_t>(y, x) = texture.at<uint8_t>(y, std::min(src, texture.cols - 1));
+    }
+  }
+}
+
+// ------------------------------------------------------------------------------------------ references
+std::vector<uint64_t> ReferenceCensus(const cv::Mat& gray, int ww, int wh) {
+  const int w = gray.cols, h = gray.rows;
+  std::vector<uint64_t> codes(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const int centre = gray.at<uint8_t>(y, x);
+      uint64_t code = 0;
+      int bit = 0;
+      for (int dy = -wh / 2; dy <= wh / 2; ++dy) {
+        for (int dx = -ww / 2; dx <= ww / 2; ++dx) {
+          if (dx == 0 && dy == 0) continue;
+          const int v = gray.at<uint8_t>(std::clamp(y + dy, 0, h - 1), std::clamp(x + dx, 0, w - 1));
+          if (v < centre) code |= uint64_t{1} << bit;
+          ++bit;
+        }
+      }
+      codes[static_cast<size_t>(y) * w + x] = code;
+    }
+  }
+  return codes;
+}
+
+// Birchfield–Tomasi in half grey levels, from the definition.
+int ReferenceBt2(const uint8_t* left, const uint8_t* right, int w, int x, int xr) {
+  auto range = [w](const uint8_t* row, int i, int* lo, int* hi) {
+    const int c = 2 * row[i];
+    const int minus = row[i] + row[std::max(i - 1, 0)];
+    const int plus = row[i] + row[std::min(i + 1, w - 1)];
+    *lo = std::min({c, minus, plus});
+    *hi = std::max({c, minus, plus});
+  };
+  int lmin, lmax, rmin, rmax;
+  range(left, x, &lmin, &lmax);
+  range(right, xr, &rmin, &rmax);
+  const int il = 2 * left[x], ir = 2 * right[xr];
+  const int d_lr = std::max({0, il - rmax, rmin - il});
+  const int d_rl = std::max({0, ir - lmax, lmin - ir});
+  return std::min(d_lr, d_rl);
+}
+
+struct Config {
+  int width = 311, height = 239;
+  int min_disparity = 0, num_disparities = 37;
+  int paths = 8;
+  int threads = 1;
+  int bt_weight = 0;
+  int alpha = 0;
+  SgmSubpixel subpixel = SgmSubpixel::kEquiangular;
+  int census_width = 9, census_height = 7;
+};
+
+std::string Describe(const Config& c) {
+  return fmt::format("{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} subpixel={} census={}x{}",
+                     c.width, c.height, c.min_disparity, c.num_disparities, c.paths, c.threads, c.bt_weight,
+                     c.alpha, static_cast<int>(c.subpixel), c.census_width, c.census_height);
+}
+
+SgmOptions OptionsFor(const Config& c) {
+  SgmOptions o;
+  o.min_disparity = c.min_disparity;
+  o.num_disparities = c.num_disparities;
+  o.num_paths = c.paths;
+  o.threads = c.threads;
+  o.bt_weight = c.bt_weight;
+  o.p2_gradient_alpha = c.alpha;
+  o.subpixel = c.subpixel;
+  o.census_width = c.census_width;
+  o.census_height = c.census_height;
+  return o;
+}
+
+struct Reference {
+  cv::Mat left, right;
+  std::vector<uint64_t> census_left, census_right;
+  std::vector<uint16_t> cost;  // [y][x][k], num_disparities lanes
+  std::vector<uint32_t> sum;   // [y][x][k]
+  std::vector<int> best, best_cost, second, right_best;
+  cv::Mat disparity;  // final float output
+};
+
+Reference ComputeReference(const Config& c) {
+  Reference r;
+  MakePair(c.width, c.height, std::max(0, c.min_disparity) + 4, 11, &r.left, &r.right);
+  const SgmOptions o = OptionsFor(c);
+  const int w = c.width, h = c.height, num = c.num_disparities, dmin = c.min_disparity;
+  r.census_left = ReferenceCensus(r.left, c.census_width, c.census_height);
+  r.census_right = ReferenceCensus(r.right, c.census_width, c.census_height);
+  const int bits = c.census_width * c.census_height - 1;
+  const int max_cost = bits + (o.bt_weight * 2 * o.bt_truncation) / 16;
+  auto at = [&](int y, int x, int k) { return (static_cast<size_t>(y) * w + x) * num + k; };
+  r.cost.assign(static_cast<size_t>(w) * h * num, 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      for (int k = 0; k < num; ++k) {
+        const int xr = x - dmin - k;
+        int cost = max_cost;
+        if (xr >= 0 && xr < w) {
+          cost = std::popcount(r.census_left[static_cast<size_t>(y) * w + x] ^
+                               r.census_right[static_cast<size_t>(y) * w + xr]);
+          if (o.bt_weight > 0) {
+            const int bt2 = ReferenceBt2(r.left.ptr<uint8_t>(y), r.right.ptr<uint8_t>(y), w, x, xr);
+            cost += (o.bt_weight * std::min(bt2, 2 * o.bt_truncation)) / 16;
+          }
+        }
+        r.cost[at(y, x, k)] = static_cast<uint16_t>(cost);
+      }
+    }
+  }
+  // Path aggregation, one direction at a time, straight from the recurrence.
+  std::vector<std::pair<int, int>> directions = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  if (c.paths == 8) directions.insert(directions.end(), {{1, 1}, {-1, 1}, {1, -1}, {-1, -1}});
+  r.sum.assign(r.cost.size(), 0);
+  std::vector<int> path(r.cost.size());
+  for (const auto& [dx, dy] : directions) {
+    for (int yi = 0; yi < h; ++yi) {
+      const int y = dy >= 0 ? yi : h - 1 - yi;
+      for (int xi = 0; xi < w; ++xi) {
+        const int x = dx >= 0 ? xi : w - 1 - xi;
+        const int px = x - dx, py = y - dy;
+        const bool start = px < 0 || px >= w || py < 0 || py >= h;
+        int prev_min = 0, p2 = o.p2;
+        if (!start) {
+          prev_min = *std::min_element(&path[at(py, px, 0)], &path[at(py, px, 0)] + num);
+          const int step = std::abs(r.left.at<uint8_t>(y, x) - r.left.at<uint8_t>(py, px));
+          if (o.p2_gradient_alpha > 0) {
+            p2 = std::max(o.p1 + 1, o.p2 * o.p2_gradient_alpha / (o.p2_gradient_alpha + step));
+          }
+        }
+        for (int k = 0; k < num; ++k) {
+          int value = r.cost[at(y, x, k)];
+          if (!start) {
+            int best = path[at(py, px, k)];
+            if (k > 0) best = std::min(best, path[at(py, px, k - 1)] + o.p1);
+            if (k + 1 < num) best = std::min(best, path[at(py, px, k + 1)] + o.p1);
+            best = std::min(best, prev_min + p2);
+            value += best - prev_min;
+          }
+          path[at(y, x, k)] = value;
+          r.sum[at(y, x, k)] += value;
+        }
+      }
+    }
+  }
+  // Winner-takes-all (left and right view), uniqueness, subpixel, left-right check.
+  r.best.assign(static_cast<size_t>(w) * h, 0);
+  r.best_cost = r.second = r.right_best = r.best;
+  cv::Mat fixed(h, w, CV_16SC1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint32_t* s = &r.sum[at(y, x, 0)];
+      const int best = static_cast<int>(std::min_element(s, s + num) - s);
+      int second = 0xFFFF;
+      for (int k = 0; k < num; ++k) {
+        if (std::abs(k - best) > 1) second = std::min(second, static_cast<int>(s[k]));
+      }
+      const size_t i = static_cast<size_t>(y) * w + x;
+      r.best[i] = best;
+      r.best_cost[i] = static_cast<int>(s[best]);
+      r.second[i] = second;
+    }
+    for (int xr = 0; xr < w; ++xr) {
+      int best = -1;
+      uint32_t best_cost = 0;
+      for (int k = 0; k < num; ++k) {
+        const int x = xr + dmin + k;
+        if (x < 0 || x >= w) continue;
+        if (best < 0 || r.sum[at(y, x, k)] < best_cost) {
+          best = k;
+          best_cost = r.sum[at(y, x, k)];
+        }
+      }
+      r.right_best[static_cast<size_t>(y) * w + xr] = best;
+    }
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      const int best = r.best[i];
+      int16_t& out = fixed.at<int16_t>(y, x);
+      out = kSgmInvalidFixed;
+      if (x - dmin < 0 || x - dmin - (num - 1) >= w) continue;
+      if (static_cast<int64_t>(r.second[i]) * (100 - o.uniqueness_ratio) < int64_t{r.best_cost[i]} * 100) continue;
+      const int xr = x - dmin - best;
+      if (xr < 0 || xr >= w) continue;
+      const int right = r.right_best[static_cast<size_t>(y) * w + xr];
+      if (right < 0 || std::abs(right - best) > o.lr_max_diff) continue;
+      double offset = 0;
+      if (best > 0 && best < num - 1 && o.subpixel != SgmSubpixel::kNone) {
+        const double c0 = r.sum[at(y, x, best - 1)], c1 = r.sum[at(y, x, best)], c2 = r.sum[at(y, x, best + 1)];
+        const double den = o.subpixel == SgmSubpixel::kEquiangular ? 2 * (std::max(c0, c2) - c1)
+                                                                    : 2 * (c0 + c2 - 2 * c1);
+        if (den > 0) offset = std::round((c0 - c2) * kSgmSubpixelScale / den);
+      }
+      out = static_cast<int16_t>((dmin + best) * kSgmSubpixelScale + static_cast<int>(offset));
+    }
+  }
+  // Speckle filter (OpenCV's, used as is) and the median of valid neighbours.
+  cv::filterSpeckles(fixed, kSgmInvalidFixed, o.speckle_window,
+                     static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)));
+  cv::Mat median = fixed.clone();
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (fixed.at<int16_t>(y, x) == kSgmInvalidFixed) continue;
+      std::vector<int> values;
+      for (int yy = y - 1; yy <= y + 1; ++yy) {
+        for (int xx = x - 1; xx <= x + 1; ++xx) {
+          if (yy < 0 || yy >= h || xx < 0 || xx >= w) continue;
+          if (fixed.at<int16_t>(yy, xx) != kSgmInvalidFixed) values.push_back(fixed.at<int16_t>(yy, xx));
+        }
+      }
+      std::sort(values.begin(), values.end());
+      median.at<int16_t>(y, x) = static_cast<int16_t>(values[(values.size() - 1) / 2]);
+    }
+  }
+  r.disparity.create(h, w, CV_32FC1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const int v = median.at<int16_t>(y, x);
+      r.disparity.at<float>(y, x) = v == kSgmInvalidFixed ? kInvalidDisparity : v / 16.0f;
+    }
+  }
+  return r;
+}
+
+// References are expensive; compute each configuration once for all targets.
+const Reference& CachedReference(const Config& c) {
+  static std::map<std::string, Reference> cache;
+  const std::string key = Describe(c);
+  auto it = cache.find(key);
+  if (it == cache.end()) it = cache.emplace(key, ComputeReference(c)).first;
+  return it->second;
+}
+
+detail::CostInput CostInputFor(const Config& c, const Reference& r, const std::vector<uint64_t>& census_left,
+                               const std::vector<uint64_t>& census_right) {
+  detail::CostInput in;
+  in.width = c.width;
+  in.height = c.height;
+  in.min_disparity = c.min_disparity;
+  in.num_disparities = c.num_disparities;
+  in.census_bits = c.census_width * c.census_height - 1;
+  in.bt_weight = c.bt_weight;
+  in.bt_truncation = SgmOptions().bt_truncation;
+  in.census_left = census_left.data();
+  in.census_right = census_right.data();
+  in.gray_left = r.left.ptr<uint8_t>();
+  in.gray_right = r.right.ptr<uint8_t>();
+  return in;
+}
+
+// Configurations: odd sizes, num-disp 37 and 64, min-disp 0 / positive / negative, 4 and 8 paths, 1 and 2
+// threads, BT on/off, gradient-adapted P2 on/off, both subpixel modes, a non-default census window.
+std::vector<Config> Configs() {
+  std::vector<Config> configs;
+  Config c;
+  configs.push_back(c);  // 311x239, 0..36, 8 paths, 1 thread
+  c.num_disparities = 64;
+  c.min_disparity = 5;
+  c.paths = 4;
+  c.threads = 2;
+  configs.push_back(c);
+  c.num_disparities = 37;
+  c.min_disparity = -3;
+  c.paths = 8;
+  c.threads = 2;
+  c.bt_weight = 12;
+  c.alpha = 40;
+  c.subpixel = SgmSubpixel::kParabola;
+  configs.push_back(c);
+  Config small;
+  small.width = 67;
+  small.height = 13;
+  small.num_disparities = 64;
+  small.min_disparity = 9;
+  small.threads = 3;
+  small.census_width = 5;
+  small.census_height = 5;
+  configs.push_back(small);
+  return configs;
+}
+
+class SgmKernelTest : public hwy::TestWithParamTarget {};
+HWY_TARGET_INSTANTIATE_TEST_SUITE_P(SgmKernelTest);
+
+TEST_P(SgmKernelTest, CensusEqualsReference) {
+  for (const Config& c : Configs()) {
+    const Reference& r = CachedReference(c);
+    std::vector<uint64_t> codes(static_cast<size_t>(c.width) * c.height);
+    // Two row ranges, as two threads would compute them.
+    detail::CensusTransform(r.left, c.census_width, c.census_height, 0, c.height / 3, codes.data());
+    detail::CensusTransform(r.left, c.census_width, c.census_height, c.height / 3, c.height, codes.data());
+    ASSERT_EQ(codes, r.census_left) << Describe(c);
+  }
+}
+
+TEST_P(SgmKernelTest, MatchingCostEqualsReference) {
+  for (const Config& c : Configs()) {
+    const Reference& r = CachedReference(c);
+    const detail::CostInput in = CostInputFor(c, r, r.census_left, r.census_right);
+    const int padded = detail::PaddedDisparities(c.num_disparities);
+    std::vector<uint16_t> row(static_cast<size_t>(c.width) * padded);
+    for (int y = 0; y < c.height; y += 7) {
+      detail::MatchingCostRow(in, y, row.data());
+      for (int x = 0; x < c.width; ++x) {
+        for (int k = 0; k < c.num_disparities; ++k) {
+          ASSERT_EQ(row[static_cast<size_t>(x) * padded + k],
+                    r.cost[(static_cast<size_t>(y) * c.width + x) * c.num_disparities + k])
+              << Describe(c) << " at x=" << x << " y=" << y << " k=" << k;
+        }
+      }
+    }
+  }
+}
+
+TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
+  for (const Config& c : Configs()) {
+    const Reference& r = CachedReference(c);
+    detail::AggregationInput in;
+    in.cost = CostInputFor(c, r, r.census_left, r.census_right);
+    const SgmOptions o = OptionsFor(c);
+    in.num_paths = o.num_paths;
+    in.p1 = o.p1;
+    in.p2 = o.p2;
+    in.p2_gradient_alpha = o.p2_gradient_alpha;
+    for (int threads : {1, 2}) {
+      detail::SumVolume sum;
+      detail::SweepScratch forward, backward;
+      detail::AggregatePaths(in, threads, &sum, &forward, &backward, nullptr);
+      const int num = c.num_disparities;
+      for (int y = 0; y < c.height; ++y) {
+        for (int x = 0; x < c.width; ++x) {
+          const uint16_t* s = sum.Row(y) + static_cast<size_t>(x) * sum.padded;
+          for (int k = 0; k < num; ++k) {
+            ASSERT_EQ(s[k], r.sum[(static_cast<size_t>(y) * c.width + x) * num + k])
+                << Describe(c) << " threads=" << threads << " at x=" << x << " y=" << y << " k=" << k;
+          }
+          for (int k = num; k < sum.padded; ++k) ASSERT_EQ(s[k], 0xFFFF);
+        }
+      }
+      std::vector<int16_t> best(c.width), right_best(c.width);
+      std::vector<uint16_t> best_cost(c.width), second(c.width);
+      std::vector<uint16_t> scratch(detail::WtaScratchSize(c.width, num));
+      for (int y = 0; y < c.height; ++y) {
+        detail::WinnerTakesAllRow(sum.Row(y), c.width, num, c.min_disparity,
+                                  {best.data(), best_cost.data(), second.data(), right_best.data()},
+                                  scratch.data());
+        for (int x = 0; x < c.width; ++x) {
+          const size_t i = static_cast<size_t>(y) * c.width + x;
+          ASSERT_EQ(best[x], r.best[i]) << Describe(c) << " x=" << x << " y=" << y;
+          ASSERT_EQ(best_cost[x], r.best_cost[i]) << Describe(c) << " x=" << x << " y=" << y;
+          ASSERT_EQ(second[x], r.second[i]) << Describe(c) << " x=" << x << " y=" << y;
+          ASSERT_EQ(right_best[x], r.right_best[i]) << Describe(c) << " xr=" << x << " y=" << y;
+        }
+      }
+    }
+  }
+}
+
+TEST_P(SgmKernelTest, WholePipelineEqualsReferenceForAnyThreadCount) {
+  for (const Config& c : Configs()) {
+    const Reference& r = CachedReference(c);
+    SgmMatcher matcher(OptionsFor(c));
+    const cv::Mat disparity = matcher.Compute(r.left, r.right);
+    ASSERT_EQ(disparity.type(), CV_32FC1);
+    int valid = 0;
+    for (int y = 0; y < c.height; ++y) {
+      for (int x = 0; x < c.width; ++x) {
+        const float got = disparity.at<float>(y, x), want = r.disparity.at<float>(y, x);
+        ASSERT_TRUE(got == want || (std::isinf(got) && std::isinf(want)))
+            << Describe(c) << " x=" << x << " y=" << y << " got " << got << " want " << want;
+        valid += IsValidDisparity(want);
+      }
+    }
+    // The comparison must not be vacuous: most pixels carry an estimate.
+    EXPECT_GT(valid, c.width * c.height / 2) << Describe(c);
+    // Reusing the matcher (scratch buffers) gives the same result.
+    const cv::Mat again = matcher.Compute(r.left, r.right);
+    EXPECT_EQ(cv::norm(disparity != again, cv::NORM_L1), 0) << Describe(c);
+  }
+}
+
+// ------------------------------------------------------------------------------------------ scalar stages
+TEST(SgmScalarStages, SubpixelOffsetsByHand) {
+  const int equiangular = static_cast<int>(SgmSubpixel::kEquiangular);
+  const int parabola = static_cast<int>(SgmSubpixel::kParabola);
+  EXPECT_EQ(detail::SubpixelOffset(equiangular, 10, 4, 10), 0);
+  // Minimum halfway to the left: c0 == c1.
+  EXPECT_EQ(detail::SubpixelOffset(equiangular, 4, 4, 10), -8);
+  EXPECT_EQ(detail::SubpixelOffset(equiangular, 10, 4, 4), 8);
+  // Lines of slope 6 through (0, 4) and (1, 10), mirrored through (-1, 7): vertex at -0.25 → -4/16.
+  EXPECT_EQ(detail::SubpixelOffset(equiangular, 7, 4, 10), -4);
+  // Parabola through (-1, 7), (0, 4), (1, 10): vertex at -(10 - 7) / (2 * 9) = -1/6 → -2.67/16 → -3.
+  EXPECT_EQ(detail::SubpixelOffset(parabola, 7, 4, 10), -3);
+  EXPECT_EQ(detail::SubpixelOffset(parabola, 4, 4, 4), 0);
+  EXPECT_EQ(detail::SubpixelOffset(static_cast<int>(SgmSubpixel::kNone), 7, 4, 10), 0);
+}
+
+TEST(SgmScalarStages, LeftRightCheckByHand) {
+  const int16_t right_best[6] = {-1, 3, 3, 5, 0, 2};
+  // x = 5, min_disparity 1, best 3 → xr = 1 whose right winner is 3.
+  EXPECT_TRUE(detail::LeftRightConsistent(5, 3, right_best, 6, 1, 0));
+  // best 2 → xr = 2 (right winner 3): consistent within 1 px, not within 0.
+  EXPECT_TRUE(detail::LeftRightConsistent(5, 2, right_best, 6, 1, 1));
+  EXPECT_FALSE(detail::LeftRightConsistent(5, 2, right_best, 6, 1, 0));
+  // xr = 0 has no right winner; xr < 0 is outside.
+  EXPECT_FALSE(detail::LeftRightConsistent(5, 4, right_best, 6, 1, 5));
+  EXPECT_FALSE(detail::LeftRightConsistent(2, 4, right_best, 6, 1, 5));
+}
+
+TEST(SgmScalarStages, MedianOfValidNeighbours) {
+  cv::Mat src(3, 3, CV_16SC1, cv::Scalar(kSgmInvalidFixed));
+  src.at<int16_t>(0, 0) = 10;
+  src.at<int16_t>(0, 1) = 50;
+  src.at<int16_t>(1, 1) = 20;
+  src.at<int16_t>(2, 2) = 30;
+  cv::Mat dst(3, 3, CV_16SC1);
+  detail::MedianValid3x3(src, dst, 0, 3);
+  EXPECT_EQ(dst.at<int16_t>(1, 1), 20);  // {10, 20, 30, 50}: lower median
+  EXPECT_EQ(dst.at<int16_t>(0, 0), 20);  // {10, 50, 20}
+  EXPECT_EQ(dst.at<int16_t>(2, 2), 20);  // {20, 30}
+  EXPECT_EQ(dst.at<int16_t>(1, 0), kSgmInvalidFixed);
+}
+
+}  // namespace
+}  // namespace linesight

@@ -1,0 +1,163 @@
+// The stages of SgmMatcher as free functions over plain buffers (CONVENTIONS.md §4). The SIMD kernels
+// (census, matching cost, path aggregation, winner-takes-all) are compiled for every Highway target and
+// dispatched at run time; sgm_reference_test.cc holds a naive scalar reference of each and checks that they
+// agree exactly.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <new>
+#include <opencv2/core.hpp>
+
+namespace linesight::detail {
+
+// Disparity lanes are padded to a multiple of this (the widest vector: 32 uint16 = 64 bytes) so every SIMD
+// target sees the same memory layout.
+inline constexpr int kSgmLaneAlign = 32;
+// Path costs of padding lanes and of the guards around each disparity vector: large enough never to win a
+// minimum (path costs stay below kSgmMaxPathCost), small enough that adding P1 / P2 does not saturate.
+inline constexpr uint16_t kSgmPathSentinel = 0x7FFF;
+// Upper bound on matching cost + P2, which keeps every path cost below 4096 and the 8-path sum below 32768.
+inline constexpr int kSgmMaxPathCost = 4000;
+// Invalid value of the fixed-point disparity (int16, scale kSgmSubpixelScale) used for cv::filterSpeckles.
+inline constexpr int16_t kSgmInvalidFixed = INT16_MIN;
+
+inline int PaddedDisparities(int num_disparities) {
+  return (num_disparities + kSgmLaneAlign - 1) / kSgmLaneAlign * kSgmLaneAlign;
+}
+
+// 64-byte aligned allocation for vectors that SIMD kernels stream through.
+template <typename T>
+struct CacheAlignedAllocator {
+  using value_type = T;
+  CacheAlignedAllocator() = default;
+  template <typename U>
+  CacheAlignedAllocator(const CacheAlignedAllocator<U>&) {}  // NOLINT(google-explicit-constructor)
+  T* allocate(size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64})); }
+  void deallocate(T* p, size_t) { ::operator delete(p, std::align_val_t{64}); }
+  template <typename U>
+  bool operator==(const CacheAlignedAllocator<U>&) const {
+    return true;
+  }
+};
+template <typename T>
+using AlignedVector = std::vector<T, CacheAlignedAllocator<T>>;
+
+// ---------------------------------------------------------------------------------------------------------
+// Census transform. Bit b of a pixel's code is 1 when the b-th window neighbour (row-major order over the
+// window, centre skipped) is darker than the centre. Neighbours outside the image take the value of the
+// nearest border pixel. Writes rows [row_begin, row_end) of `codes` (width*height, row-major).
+void CensusTransform(const cv::Mat& gray, int window_width, int window_height, int row_begin, int row_end,
+                     uint64_t* codes);
+
+// ---------------------------------------------------------------------------------------------------------
+// Matching cost C(x, y, k) for disparity d = min_disparity + k, k in [0, num_disparities):
+//   C = popcount(census_left(x) ^ census_right(x - d)) + (bt_weight * min(BT2, 2 * bt_truncation)) / 16
+// where BT2 is the Birchfield–Tomasi dissimilarity in half grey levels. When x - d falls outside the right
+// image C = MaxMatchingCost(). Lanes k >= num_disparities are unspecified.
+struct CostInput {
+  int width = 0;
+  int height = 0;
+  int min_disparity = 0;
+  int num_disparities = 0;
+  int census_bits = 0;  // census_width * census_height - 1
+  int bt_weight = 0;
+  int bt_truncation = 0;
+  const uint64_t* census_left = nullptr;   // width*height
+  const uint64_t* census_right = nullptr;  // width*height
+  const uint8_t* gray_left = nullptr;      // width*height, continuous
+  const uint8_t* gray_right = nullptr;     // width*height, continuous
+};
+int MaxMatchingCost(const CostInput& input);
+// Costs of row y into `out` (width * PaddedDisparities(num_disparities) uint16, pixel-major).
+void MatchingCostRow(const CostInput& input, int y, uint16_t* out);
+
+// ---------------------------------------------------------------------------------------------------------
+// Path aggregation. For each path direction r:
+//   L_r(p, k) = C(p, k) + min(L_r(p-r, k), L_r(p-r, k±1) + P1, min_i L_r(p-r, i) + P2'(p, r)) - min_i L_r(p-r, i)
+// with L_r(p, k) = C(p, k) for the first pixel of a path, and
+//   P2'(p, r) = max(P1 + 1, P2 * alpha / (alpha + |I(p) - I(p-r)|))   (P2' = P2 when alpha = 0).
+// Sum S(x, y, k) = sum over paths of L_r. 4 paths: (±1, 0), (0, ±1); 8 paths add the four diagonals.
+struct AggregationInput {
+  CostInput cost;
+  int num_paths = 8;
+  int p1 = 10;
+  int p2 = 120;
+  int p2_gradient_alpha = 0;
+};
+
+// Sum volume S: height rows of width pixels of PaddedDisparities() uint16 lanes; after AggregatePaths lanes
+// k >= num_disparities hold 0xFFFF (saturated sums of sentinels).
+struct SumVolume {
+  int width = 0;
+  int height = 0;
+  int num_disparities = 0;
+  int padded = 0;
+  AlignedVector<uint16_t> data;
+  void Resize(int w, int h, int d);
+  const uint16_t* Row(int y) const { return data.data() + static_cast<size_t>(y) * width * padded; }
+  uint16_t* Row(int y) { return data.data() + static_cast<size_t>(y) * width * padded; }
+};
+
+// Scratch of one sweep direction (reused between frames).
+struct SweepScratch {
+  AlignedVector<uint16_t> buffers;
+  AlignedVector<uint64_t> census_reversed;
+  AlignedVector<uint16_t> bt_reversed;
+  AlignedVector<uint16_t> bt_left;
+};
+
+// Runs the forward sweep (paths from the left / top) and the backward sweep (from the right / bottom) and
+// leaves S in `sum`. With threads >= 2 the two sweeps run concurrently: each first writes its half of the rows,
+// then, after a barrier, adds into the other half; integer sums make the result independent of the schedule.
+// `row_done(y)` is called once per row as soon as S of that row is final (from the thread that finished it).
+void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, SweepScratch* forward,
+                    SweepScratch* backward, const std::function<void(int)>& row_done);
+
+// ---------------------------------------------------------------------------------------------------------
+// Winner-takes-all of one row of S.
+//   best[x]   = smallest k with S(x, k) minimal
+//   best_cost = S(x, best), second_cost = min S(x, k) over |k - best| > 1 (0xFFFF if none)
+//   right_best[xr] / right_cost[xr]: smallest k minimising S(xr + min_disparity + k, k) over the left pixels
+//   x = xr + min_disparity + k inside the image (right_best = -1 if there is none).
+struct WtaRow {
+  int16_t* best = nullptr;         // width
+  uint16_t* best_cost = nullptr;   // width
+  uint16_t* second_cost = nullptr; // width
+  int16_t* right_best = nullptr;   // width
+};
+// `right_scratch` holds WtaScratchSize(width, num_disparities) uint16.
+void WinnerTakesAllRow(const uint16_t* sum_row, int width, int num_disparities, int min_disparity,
+                       WtaRow out, uint16_t* right_scratch);
+inline size_t WtaScratchSize(int width, int num_disparities) {
+  return 2 * (static_cast<size_t>(width) + PaddedDisparities(num_disparities) + 64);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Scalar stages (cheap per pixel; no SIMD).
+
+// Subpixel offset in 1/kSgmSubpixelScale px for costs c0 = S(k-1), c1 = S(k), c2 = S(k+1), rounded half away
+// from zero. kEquiangular: (c0 - c2) / (2 (max(c0, c2) - c1)); kParabola: (c0 - c2) / (2 (c0 + c2 - 2 c1));
+// 0 when the denominator is 0.
+int SubpixelOffset(int mode, int c0, int c1, int c2);  // mode: static_cast<int>(SgmSubpixel)
+
+// Left-right consistency: true when the right winner at x - (min_disparity + best) exists and differs from
+// `best` by at most max_diff.
+bool LeftRightConsistent(int x, int best, const int16_t* right_best, int width, int min_disparity,
+                         int max_diff);
+
+// 3×3 median over valid neighbours of each valid pixel (int16 fixed point, kSgmInvalidFixed = invalid);
+// the lower median when the count is even. Rows [row_begin, row_end) of dst.
+void MedianValid3x3(const cv::Mat& src, cv::Mat& dst, int row_begin, int row_end);
+
+// Name of the Highway target the kernels dispatch to.
+std::string DispatchedTargetName();
+
+// Runs fn(begin, end) over [0, n) split into `threads` contiguous parts (fn must be independent per index).
+void ParallelRanges(int n, int threads, const std::function<void(int, int)>& fn);
+
+}  // namespace linesight::detail
