@@ -164,13 +164,13 @@ struct PowerLineSceneOptions {
   // The other conductors are parallel to it, spaced along x.
   int num_conductors = 2;  // 1..4
   // x of conductor 0's axis at z = 0 (m).
-  double conductor_offset_x_m = -0.05;
+  double conductor_offset_x_m = -0.10;
   // y of conductor 0's axis at z = 0 (m; +y is down, so < 0 is above the camera).
-  double conductor_offset_y_m = -0.08;
+  double conductor_offset_y_m = -0.10;
   // x spacing between neighbouring conductors (m), >= 4 conductor radii.
-  double conductor_spacing_m = 0.45;
+  double conductor_spacing_m = 3.5;
   // Heading of the line: rotation about the camera y axis (rad, > 0 turns towards +x), |.| <= 0.5.
-  double conductor_yaw_rad = 0.0;
+  double conductor_yaw_rad = -0.10;
   // Climb of the line at the camera: rotation about the camera x axis (rad, > 0 rises), |.| <= 0.5.
   double conductor_pitch_rad = 0.0;
   // Conductor radius (m); ACSR "Drake" is 28.1 mm across.
