@@ -283,6 +283,7 @@ def main(argv):
     worst_where = {key: "" for key in VALUE_KEYS}
     problems = []
     compared = 0
+    skipped_noisy = 0
     cache = {}
     for entry in entries:
         try:
@@ -291,16 +292,25 @@ def main(argv):
         except (KeyError, TypeError):
             problems.append(f"report entry without set/scene/method/regions: {json.dumps(entry)[:200]}")
             continue
-        where = f"{set_name}/{scene_name}/{method}"
+        noise = entry.get("noise", "clean")
+        where = f"{set_name}/{scene_name}/{method}" + ("" if noise == "clean" else f" (noise {noise})")
         key = (set_name, scene_name)
         if key not in scenes:
             problems.append(f"{where}: no such scene under {args.data}")
             continue
+        # Clean runs: <set>/<scene>/<method>.pfm. A run on noisy input is checked when its map was saved as
+        # <set>/<scene>/<noise>/<method>.pfm and skipped (and counted) otherwise.
+        pfm_path = os.path.join(args.disparities, set_name, scene_name, method + ".pfm")
+        if noise != "clean":
+            pfm_path = os.path.join(args.disparities, set_name, scene_name, noise, method + ".pfm")
+            if not os.path.isfile(pfm_path):
+                skipped_noisy += 1
+                continue
         try:
             if key not in cache:
                 cache = {key: scenes[key]()}  # keep one scene in memory
             gt, masks = cache[key]
-            disparity = read_pfm(os.path.join(args.disparities, set_name, scene_name, method + ".pfm"))
+            disparity = read_pfm(pfm_path)
         except (OSError, ValueError, InputProblem) as e:
             problems.append(f"{where}: {e}")
             continue
@@ -329,6 +339,9 @@ def main(argv):
                       " ".join(f"{k}={ours[k]:.4f}" for k in ["density", "bad_1", "bad_2", "d1", "avgerr"]))
 
     print(f"verify_metrics: {compared} region(s) of {len(entries)} report entr(y/ies) recomputed")
+    if skipped_noisy:
+        print(f"verify_metrics: {skipped_noisy} entr(y/ies) on noisy input skipped: no <set>/<scene>/<noise>/"
+              "<method>.pfm saved for them")
     print(f"{'metric':<16} {'max |diff|':>12}  where")
     for key in VALUE_KEYS:
         print(f"{key:<16} {max_diff[key]:>12.3g}  {worst_where[key]}")
