@@ -9,6 +9,7 @@
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/stereo/opencv_matchers.h"
+#include "linesight/stereo/isgm.h"
 #include "linesight/stereo/sgm.h"
 
 namespace linesight {
@@ -23,7 +24,7 @@ void MatcherOptions::Check() const {
   CheckOption(threads >= 0, "MatcherOptions.threads", threads, "must be >= 0 (0 = all cores)");
 }
 
-std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm"}; }
+std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm", "isgm"}; }
 
 std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
                                              const MatcherOptions& options) {
@@ -38,6 +39,8 @@ std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
     matcher = CreateOpenCvSgbmWls(options, params);
   } else if (method == "sgm") {
     matcher = CreateSgmMatcher(options, params);
+  } else if (method == "isgm") {
+    matcher = CreateIsgmMatcher(options, params);
   } else {
     throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
                                  fmt::join(MatcherNames(), ", ")));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <opencv2/core/utility.hpp>
 
@@ -28,6 +29,10 @@ void PlaneRefinementOptions::Check() const {
   CheckOption(max_slant > 0, "PlaneRefinementOptions.max_slant", max_slant, "must be > 0 px/px");
   CheckOption(min_surface_coherence >= 0, "PlaneRefinementOptions.min_surface_coherence",
               min_surface_coherence, "must be >= 0");
+  CheckOption(photometric_radius >= 0, "PlaneRefinementOptions.photometric_radius",
+              photometric_radius, "must be >= 0 px (0 = off)");
+  CheckOption(photometric_truncation >= 1, "PlaneRefinementOptions.photometric_truncation",
+              photometric_truncation, "must be >= 1 grey level");
   CheckOption(ransac_iterations >= 0, "PlaneRefinementOptions.ransac_iterations", ransac_iterations,
               "must be >= 0");
   CheckOption(ransac_max_points >= 8, "PlaneRefinementOptions.ransac_max_points", ransac_max_points,
@@ -53,6 +58,8 @@ nlohmann::json PlaneRefinementOptions::ToJson() const {
           {"refit_iterations", refit_iterations},
           {"two_plane_fallback", two_plane_fallback},
           {"min_surface_coherence", min_surface_coherence},
+          {"photometric_radius", photometric_radius},
+          {"photometric_truncation", photometric_truncation},
           {"adopt_neighbour_planes", adopt_neighbour_planes},
           {"snap_inliers", snap_inliers}};
 }
@@ -347,40 +354,37 @@ void AdoptNeighbourPlanes(const cv::Mat& disparity, const cv::Mat& labels,
                           const SegmentIndex& index, const PlaneRefinementOptions& options,
                           std::vector<SegmentModel>* models) {
   const int segments = static_cast<int>(models->size());
-  // Adjacent segment pairs (4-neighbourhood), sorted and unique.
-  std::vector<std::pair<int32_t, int32_t>> edges;
-  for (int y = 0; y < labels.rows; ++y) {
-    const int32_t* l = labels.ptr<int32_t>(y);
-    const int32_t* below = y + 1 < labels.rows ? labels.ptr<int32_t>(y + 1) : nullptr;
-    for (int x = 0; x < labels.cols; ++x) {
-      if (x + 1 < labels.cols && l[x + 1] != l[x]) {
-        edges.emplace_back(l[x], l[x + 1]);
-        edges.emplace_back(l[x + 1], l[x]);
-      }
-      if (below && below[x] != l[x]) {
-        edges.emplace_back(l[x], below[x]);
-        edges.emplace_back(below[x], l[x]);
-      }
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  std::vector<int32_t> first_edge(segments + 1, 0);
-  for (const auto& e : edges) ++first_edge[e.first + 1];
-  for (int s = 0; s < segments; ++s) first_edge[s + 1] += first_edge[s];
-
+  const int width = labels.cols, height = labels.rows;
+  LS_CHECK(labels.type() == CV_32SC1 && labels.isContinuous());
+  const int32_t* label = labels.ptr<int32_t>();
   // Candidates come from the models as fitted (not from other adoptions), so the order does not
   // matter.
   const std::vector<SegmentModel> fitted = *models;
   cv::parallel_for_(cv::Range(0, segments), [&](const cv::Range& range) {
     std::vector<PlanePoint> points;
+    std::vector<int32_t> neighbours;
     for (int s = range.start; s < range.end; ++s) {
       if (fitted[s].kind != SegmentModelKind::kNone || fitted[s].valid < 3) continue;
       CollectValidPoints(disparity, index, s, &points);
+      // Adjacent segments (4-neighbourhood), sorted so that ties in the score go to the smaller
+      // label.
+      neighbours.clear();
+      for (int i = index.offsets[s]; i < index.offsets[s + 1]; ++i) {
+        const int p = index.pixels[i];
+        const int x = p % width, y = p / width;
+        const int around[4] = {x > 0 ? label[p - 1] : s, x + 1 < width ? label[p + 1] : s,
+                               y > 0 ? label[p - width] : s, y + 1 < height ? label[p + width] : s};
+        for (int n : around) {
+          if (n != s && std::find(neighbours.begin(), neighbours.end(), n) == neighbours.end()) {
+            neighbours.push_back(n);
+          }
+        }
+      }
+      std::sort(neighbours.begin(), neighbours.end());
       int best_score = 0;
       DisparityPlane best;
-      for (int e = first_edge[s]; e < first_edge[s + 1]; ++e) {
-        const SegmentModel& neighbour = fitted[edges[e].second];
+      for (int n : neighbours) {
+        const SegmentModel& neighbour = fitted[n];
         const int planes = neighbour.kind == SegmentModelKind::kPlane       ? 1
                            : neighbour.kind == SegmentModelKind::kTwoPlanes ? 2
                                                                             : 0;
@@ -413,8 +417,9 @@ namespace {
 // nearest surface pixels left and right agree, or only one side exists); between two different
 // surfaces (an occlusion) they take the background, i.e. the smaller plane value.
 void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& model,
-                    const PlaneRefinementOptions& options, float min_value, float max_value,
-                    int width, float* d, int64_t* filled) {
+                    const PlaneRefinementOptions& options, const SegmentPhotometry* photometry,
+                    float min_value, float max_value, int width, float* d, int64_t* filled,
+                    int64_t* replaced) {
   constexpr int8_t kHole = -1;
   const int begin = index.offsets[segment], end = index.offsets[segment + 1];
   std::vector<int8_t> surface(end - begin);
@@ -429,6 +434,21 @@ void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& 
     if (!IsValidDisparity(d[p])) continue;
     const float p0 = plane_value(0, p), p1 = plane_value(1, p);
     const float r0 = std::abs(d[p] - p0), r1 = std::abs(d[p] - p1);
+    if (photometry) {
+      // The images decide which surface a matched pixel is on: a window restricted to the segment
+      // does not straddle the depth edge the way the matcher's window did (foreground fattening).
+      const float c0 = photometry->Cost(p % width, p / width, segment, model.planes[0]);
+      const float c1 = photometry->Cost(p % width, p / width, segment, model.planes[1]);
+      s = c0 < c1 || (c0 == c1 && p0 <= p1) ? 0 : 1;
+      const float plane = s == 0 ? p0 : p1;
+      if ((s == 0 ? r0 : r1) > options.outlier_threshold) {
+        d[p] = plane;
+        ++*replaced;
+      } else if (options.snap_inliers) {
+        d[p] = plane;
+      }
+      continue;
+    }
     if (std::min(r0, r1) > options.outlier_threshold) {
       d[p] = kInvalidDisparity;  // a mismatch on neither surface
       continue;
@@ -471,9 +491,40 @@ void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& 
 
 }  // namespace
 
+float SegmentPhotometry::Cost(int x, int y, int segment, const DisparityPlane& plane) const {
+  const int channels = left.channels();
+  const int width = left.cols, height = left.rows;
+  const int32_t* label = labels.ptr<int32_t>();
+  float total = 0;
+  int count = 0;
+  for (int wy = std::max(0, y - radius); wy <= std::min(height - 1, y + radius); ++wy) {
+    const uint8_t* l = left.ptr<uint8_t>(wy);
+    const uint8_t* r = right.ptr<uint8_t>(wy);
+    for (int wx = std::max(0, x - radius); wx <= std::min(width - 1, x + radius); ++wx) {
+      if (label[wy * width + wx] != segment) continue;
+      ++count;
+      const float xr = static_cast<float>(wx - plane.At(wx, wy));
+      if (!(xr >= 0) || xr > width - 1) {
+        total += static_cast<float>(truncation * channels);
+        continue;
+      }
+      const int x0 = std::min(static_cast<int>(xr), std::max(width - 2, 0));
+      const int x1 = std::min(x0 + 1, width - 1);
+      const float t = xr - static_cast<float>(x0);
+      for (int ch = 0; ch < channels; ++ch) {
+        const float right_value = (1 - t) * r[x0 * channels + ch] + t * r[x1 * channels + ch];
+        total +=
+            std::min(std::abs(l[wx * channels + ch] - right_value), static_cast<float>(truncation));
+      }
+    }
+  }
+  return count > 0 ? total / count : 0.0f;
+}
+
 void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentModel>& models,
-                        const PlaneRefinementOptions& options, float min_value, float max_value,
-                        cv::Mat* disparity, PlaneRefinementStats* stats) {
+                        const PlaneRefinementOptions& options, const SegmentPhotometry* photometry,
+                        float min_value, float max_value, cv::Mat* disparity,
+                        PlaneRefinementStats* stats) {
   LS_CHECK(disparity->type() == CV_32FC1 && disparity->isContinuous());
   const int segments = static_cast<int>(models.size());
   const int width = disparity->cols;
@@ -501,7 +552,10 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
           d[p] = plane;
         }
       }
-      if (two) ApplyTwoPlanes(index, s, model, options, min_value, max_value, width, d, &filled[s]);
+      if (two) {
+        ApplyTwoPlanes(index, s, model, options, photometry, min_value, max_value, width, d,
+                       &filled[s], &replaced[s]);
+      }
     }
   });
   if (stats) {
@@ -571,10 +625,22 @@ int64_t FillFromBackground(cv::Mat* disparity) {
 cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_image,
                                   const PlaneRefinementOptions& options,
                                   PlaneRefinementStats* stats) {
+  return RefineDisparityWithPlanes(disparity, left_image, cv::Mat(), options, stats);
+}
+
+cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_image,
+                                  const cv::Mat& right_image, const PlaneRefinementOptions& options,
+                                  PlaneRefinementStats* stats) {
   options.Check();
   if (disparity.type() != CV_32FC1) {
     throw InputError(
         fmt::format("plane refinement needs a CV_32FC1 disparity, got type {}", disparity.type()));
+  }
+  if (!right_image.empty() &&
+      (right_image.size() != left_image.size() || right_image.type() != left_image.type())) {
+    throw InputError(fmt::format("right image is {}x{} type {} but the left image is {}x{} type {}",
+                                 right_image.cols, right_image.rows, right_image.type(),
+                                 left_image.cols, left_image.rows, left_image.type()));
   }
   if (disparity.size() != left_image.size()) {
     throw InputError(fmt::format("disparity is {}x{} but the left image is {}x{}", disparity.cols,
@@ -621,7 +687,17 @@ cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_
   st.plane_fit_ms = watch.ElapsedMs();
 
   watch.Restart();
-  detail::ApplySegmentPlanes(index, models, options, min_value, max_value, &out, &st);
+  std::optional<detail::SegmentPhotometry> photometry;
+  if (!right_image.empty() && options.photometric_radius > 0) {
+    photometry.emplace();
+    photometry->left = left_image;
+    photometry->right = right_image;
+    photometry->labels = labels;
+    photometry->radius = options.photometric_radius;
+    photometry->truncation = options.photometric_truncation;
+  }
+  detail::ApplySegmentPlanes(index, models, options, photometry ? &*photometry : nullptr, min_value,
+                             max_value, &out, &st);
   st.holes_filled_from_background = detail::FillFromBackground(&out);
   st.fill_ms = watch.ElapsedMs();
   return out;

@@ -54,6 +54,12 @@ struct PlaneRefinementOptions {
   // second surface must be a region (even a 1-px wire scores 2), not scattered mismatches that
   // happen to agree, >= 0
   double min_surface_coherence = 1.5;
+  // With the right image: in a two-plane segment each matched pixel takes the plane whose warp
+  // matches the images better over a (2r+1)^2 window restricted to the segment (undoes the
+  // matcher's foreground fattening); radius in px, 0 = off
+  int photometric_radius = 0;
+  int photometric_truncation =
+      30;  // grey levels at which the per-channel absolute difference saturates
   bool adopt_neighbour_planes =
       true;                   // segments without a plane try the planes of adjacent segments
   bool snap_inliers = false;  // also replace valid disparities near the plane by the plane value
@@ -81,6 +87,13 @@ struct PlaneRefinementStats {
 // values (an input without any valid pixel gives all zeros).
 cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_image,
                                   const PlaneRefinementOptions& options,
+                                  PlaneRefinementStats* stats = nullptr);
+
+// As above; right_image (same size and type as the left, or empty) lets the images decide which
+// surface a matched pixel of a two-plane segment is on
+// (PlaneRefinementOptions::photometric_radius).
+cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_image,
+                                  const cv::Mat& right_image, const PlaneRefinementOptions& options,
                                   PlaneRefinementStats* stats = nullptr);
 
 namespace detail {
@@ -155,9 +168,22 @@ void AdoptNeighbourPlanes(const cv::Mat& disparity, const cv::Mat& labels,
 // Writes plane values over outliers and holes of every segment with a model (in two-plane segments
 // holes take the surface that encloses them along the row, or the background between two surfaces).
 // Values are clamped to [min_value, max_value].
+// Matching evidence for choosing between the two planes of a segment.
+struct SegmentPhotometry {
+  cv::Mat left, right;  // 8-bit, same size and type (grey or BGR)
+  cv::Mat labels;       // CV_32SC1 superpixel labels, continuous
+  int radius = 2;       // window radius (px)
+  int truncation = 30;  // per-channel truncation of the absolute difference (grey levels)
+  // Mean truncated absolute difference between the left pixels of `segment` in the window around
+  // (x, y) and the right image (linearly interpolated) at x - plane(x, y); a pixel mapped outside
+  // costs the truncation.
+  float Cost(int x, int y, int segment, const DisparityPlane& plane) const;
+};
+
 void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentModel>& models,
-                        const PlaneRefinementOptions& options, float min_value, float max_value,
-                        cv::Mat* disparity, PlaneRefinementStats* stats);
+                        const PlaneRefinementOptions& options, const SegmentPhotometry* photometry,
+                        float min_value, float max_value, cv::Mat* disparity,
+                        PlaneRefinementStats* stats);
 
 // Fills every invalid pixel with the smaller of the nearest valid disparities left and right on its
 // row (one side if only one exists); rows without any valid pixel copy the nearest filled row; an

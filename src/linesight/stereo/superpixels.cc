@@ -55,7 +55,10 @@ void AssignBand(const cv::Mat& features, const std::vector<float>& centres, int 
         if (has_other_col) cells[n++] = gy * grid_x + gx_other;
         if (has_other_row) cells[n++] = gy_other * grid_x + gx;
         if (has_other_row && has_other_col) cells[n++] = gy_other * grid_x + gx_other;
-        std::sort(cells, cells + n);  // ties go to the smaller index
+        // Increasing index order, so that ties go to the smaller index (insertion sort of <= 4).
+        for (int i = 1; i < n; ++i) {
+          for (int j = i; j > 0 && cells[j - 1] > cells[j]; --j) std::swap(cells[j - 1], cells[j]);
+        }
         float row_term[4], cx[4], cf[4][kChannels];
         for (int i = 0; i < n; ++i) {
           const float* c = &centres[static_cast<size_t>(cells[i]) * kStride];

@@ -1,0 +1,95 @@
+#include "linesight/stereo/isgm.h"
+
+#include <algorithm>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+SgmOptions IsgmDefaultSgmOptions() {
+  SgmOptions o;
+  o.p1 = 14;
+  o.p2 = 160;
+  o.p2_gradient_alpha = 10;
+  return o;
+}
+
+void IsgmOptions::Check() const {
+  sgm.Check();
+  refinement.Check();
+}
+
+nlohmann::json IsgmOptions::ToJson() const {
+  return {{"sgm", sgm.ToJson()}, {"refinement", refinement.ToJson()}};
+}
+
+IsgmMatcher::IsgmMatcher(const IsgmOptions& options) : options_(options), sgm_(options.sgm) {
+  options_.Check();
+}
+
+IsgmResult IsgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right) {
+  IsgmResult result;
+  result.sgm = sgm_.ComputeDetailed(left, right);
+  // Superpixels see the image as given (colour if BGR); a 4-channel input is reduced to BGR.
+  cv::Mat left_for_segments = left, right_for_segments = right;
+  if (left.channels() == 4) {
+    left_for_segments = ToGray8(left);
+    right_for_segments = ToGray8(right);
+  }
+  result.disparity =
+      RefineDisparityWithPlanes(result.sgm.disparity, left_for_segments, right_for_segments,
+                                options_.refinement, &result.refinement);
+  // Planes are clamped to the range of SGM's valid values; if SGM found nothing, the zeros of the
+  // fill are moved into the search range.
+  const float lo = static_cast<float>(options_.sgm.min_disparity);
+  const float hi =
+      static_cast<float>(options_.sgm.min_disparity + options_.sgm.num_disparities - 1);
+  for (int y = 0; y < result.disparity.rows; ++y) {
+    float* d = result.disparity.ptr<float>(y);
+    for (int x = 0; x < result.disparity.cols; ++x) d[x] = std::clamp(d[x], lo, hi);
+  }
+  return result;
+}
+
+cv::Mat IsgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
+  return ComputeDetailed(left, right).disparity;
+}
+
+nlohmann::json IsgmMatcher::Settings() const {
+  nlohmann::json settings = options_.ToJson();
+  settings["method"] = "isgm";
+  settings["simd_target"] = SgmSimdTarget();
+  return settings;
+}
+
+IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params) {
+  IsgmOptions o;
+  // ReadSgmOptions starts from SgmOptions' defaults: put isgm's own defaults back for keys not
+  // given.
+  o.sgm = ReadSgmOptions(options, params);
+  const SgmOptions tuned = IsgmDefaultSgmOptions();
+  if (!options.params.count("p1")) o.sgm.p1 = tuned.p1;
+  if (!options.params.count("p2")) o.sgm.p2 = tuned.p2;
+  if (!options.params.count("p2_alpha")) o.sgm.p2_gradient_alpha = tuned.p2_gradient_alpha;
+  PlaneRefinementOptions& r = o.refinement;
+  r.superpixels.region_size = params.GetInt("superpixel_size", r.superpixels.region_size);
+  r.superpixels.compactness = params.GetDouble("superpixel_compactness", r.superpixels.compactness);
+  r.inlier_threshold = params.GetDouble("plane_inlier", r.inlier_threshold);
+  r.outlier_threshold = params.GetDouble("plane_outlier", r.outlier_threshold);
+  r.min_inlier_ratio = params.GetDouble("plane_min_inlier_ratio", r.min_inlier_ratio);
+  r.max_slant = params.GetDouble("plane_max_slant", r.max_slant);
+  r.two_plane_fallback = params.GetBool("two_planes", r.two_plane_fallback);
+  r.adopt_neighbour_planes = params.GetBool("adopt_planes", r.adopt_neighbour_planes);
+  r.snap_inliers = params.GetBool("snap_inliers", r.snap_inliers);
+  r.photometric_radius = params.GetInt("photometric_radius", r.photometric_radius);
+  o.Check();
+  return o;
+}
+
+std::unique_ptr<StereoMatcher> CreateIsgmMatcher(const MatcherOptions& options,
+                                                 MatcherParams& params) {
+  return std::make_unique<IsgmMatcher>(ReadIsgmOptions(options, params));
+}
+
+}  // namespace linesight

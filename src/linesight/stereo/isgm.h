@@ -1,0 +1,66 @@
+// The `isgm` method: our SGM (sgm.h) whose disparity map is refined by robust least-squares planes
+// inside superpixels of the left image (plane_refinement.h), giving a 100 % dense map:
+//
+//   SgmMatcher::ComputeDetailed → SegmentSuperpixels → FitSegmentPlanes → AdoptNeighbourPlanes
+//   → ApplySegmentPlanes (outliers and holes take the plane) → FillFromBackground (occlusions)
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "linesight/stereo/matcher.h"
+#include "linesight/stereo/plane_refinement.h"
+#include "linesight/stereo/sgm.h"
+
+namespace linesight {
+
+// SGM settings that suit the plane refinement (tuned once over all benchmark sets, see README):
+// stronger smoothness penalties and a gradient-adapted P2; everything else is SgmOptions' default.
+SgmOptions IsgmDefaultSgmOptions();
+
+struct IsgmOptions {
+  SgmOptions sgm = IsgmDefaultSgmOptions();  // the matcher whose output is refined
+  PlaneRefinementOptions refinement;         // superpixels, plane fit, filling
+
+  void Check() const;
+  nlohmann::json ToJson() const;
+};
+
+struct IsgmResult {
+  cv::Mat disparity;  // CV_32FC1, dense (every pixel finite), within the disparity range
+  SgmResult sgm;      // the SGM stage's products (sgm.disparity = before refinement)
+  PlaneRefinementStats refinement;
+};
+
+// Not thread-safe (the SGM scratch buffers are reused); use one matcher per thread.
+class IsgmMatcher final : public StereoMatcher {
+ public:
+  explicit IsgmMatcher(const IsgmOptions& options);
+
+  std::string Name() const override { return "isgm"; }
+  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override;
+  nlohmann::json Settings() const override;
+
+  IsgmResult ComputeDetailed(const cv::Mat& left, const cv::Mat& right);
+  const IsgmOptions& options() const { return options_; }
+
+ private:
+  IsgmOptions options_;
+  SgmMatcher sgm_;
+};
+
+// Reads IsgmOptions from MatcherOptions and --param keys: every sgm key (census_width,
+// census_height, bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel,
+// lr_max_diff, speckle_window, speckle_range, median; defaults from IsgmDefaultSgmOptions) plus
+// superpixel_size, superpixel_compactness, plane_inlier, plane_outlier, plane_min_inlier_ratio,
+// plane_max_slant, two_planes, adopt_planes, snap_inliers, photometric_radius.
+IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params);
+
+// Factory hook used by CreateMatcher("isgm", ...).
+std::unique_ptr<StereoMatcher> CreateIsgmMatcher(const MatcherOptions& options,
+                                                 MatcherParams& params);
+
+}  // namespace linesight
