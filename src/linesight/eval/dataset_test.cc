@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/io/pfm.h"
 
 namespace linesight {
 namespace {
@@ -129,6 +130,8 @@ TEST(FindScenes, FindsEverySceneOfTheSharedData) {
   EXPECT_EQ(layout_of["eth3d-two-view"], DatasetLayout::kEth3d);
   EXPECT_EQ(layout_of["kitti-2015"], DatasetLayout::kKitti2015);
   EXPECT_EQ(layout_of["sceneflow-sample"], DatasetLayout::kSceneFlow);
+  EXPECT_EQ(LayoutName(DatasetLayout::kMiddlebury2001), "middlebury-2001-2003");
+  EXPECT_EQ(LayoutName(DatasetLayout::kOpenCvAloe), "opencv-aloe");
 }
 
 TEST(FindScenes, RootCanBeASceneFolderOrADatasetFolder) {
@@ -269,6 +272,25 @@ TEST_F(SharedDataScenes, SceneFlowOcclusionIsWhite) {
   EXPECT_EQ(cv::countNonZero(s.masks.at("all")), 960 * 540);  // dense
   // 77933 of the pixels are 255 (occluded) in occlusion/left/A-0032-0006.png.
   EXPECT_EQ(cv::countNonZero(s.masks.at("nonocc")), 960 * 540 - 77933);
+  // The encoding, checked against the right view's disparity: a visible pixel lands on a right
+  // pixel with the same disparity, an occluded one (almost) never does.
+  const cv::Mat right_gt =
+      ReadPfm(kSharedData / "sceneflow-sample" / "disparity" / "right" / "A-0032-0006.pfm");
+  int64_t consistent[2] = {0, 0}, total[2] = {0, 0};
+  for (int y = 0; y < s.ground_truth.rows; ++y) {
+    for (int x = 0; x < s.ground_truth.cols; ++x) {
+      const float d = s.ground_truth.at<float>(y, x);
+      const int x_right = static_cast<int>(std::floor(x - d + 0.5f));
+      const int visible = s.masks.at("nonocc").at<uint8_t>(y, x) ? 1 : 0;
+      ++total[visible];
+      if (x_right >= 0 && x_right < s.ground_truth.cols &&
+          std::abs(right_gt.at<float>(y, x_right) - d) <= 1.0f) {
+        ++consistent[visible];
+      }
+    }
+  }
+  EXPECT_GT(static_cast<double>(consistent[1]) / total[1], 0.99);
+  EXPECT_LT(static_cast<double>(consistent[0]) / total[0], 0.05);
 }
 
 TEST_F(SharedDataScenes, Middlebury2005HalfScaleAndDerivedNonOccludedMask) {
