@@ -1,0 +1,108 @@
+#include "linesight/ranging/pipeline.h"
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+void RangingPipelineOptions::Check() const {
+  CheckOption(min_depth_m > 0.0, "RangingPipelineOptions.min_depth_m", min_depth_m, "must be > 0");
+  CheckOption(max_depth_m > min_depth_m, "RangingPipelineOptions.max_depth_m", max_depth_m,
+              "must exceed min_depth_m");
+  CheckOption(disparity_margin_px >= 0, "RangingPipelineOptions.disparity_margin_px",
+              disparity_margin_px, "must be >= 0");
+  rectify.Check();
+}
+
+RangingPipeline::RangingPipeline(const StereoCalibration& calib,
+                                 const RangingPipelineOptions& options)
+    : options_(options) {
+  options_.Check();
+  options_.ranging.min_depth_m = options_.min_depth_m;
+  options_.ranging.max_depth_m = options_.max_depth_m;
+  options_.finder.min_depth_m = options_.min_depth_m;
+  options_.finder.max_depth_m = options_.max_depth_m;
+  options_.ranging.Check();
+  options_.finder.Check();
+  if (options_.input_rectified) {
+    rectified_calibration_ = calib;
+  } else {
+    rectifier_.emplace(calib, options_.rectify);
+    rectified_calibration_ = rectifier_->calibration();
+  }
+  geometry_ = GeometryFromCalibration(rectified_calibration_);
+  disparity_range_ = DisparityRangeForDepths(geometry_, options_.min_depth_m, options_.max_depth_m,
+                                             options_.disparity_margin_px);
+  method_ = options_.method.empty() ? DefaultMatcherName() : options_.method;
+  MatcherOptions matcher_options;
+  matcher_options.min_disparity = disparity_range_.min_disparity;
+  matcher_options.num_disparities = disparity_range_.num_disparities;
+  matcher_options.threads = options_.threads;
+  matcher_options.params = options_.params;
+  matcher_ = CreateMatcher(method_, matcher_options);
+}
+
+RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
+                                      std::optional<cv::Range> rows) const {
+  const cv::Size expected = rectified_calibration_.image_size;
+  for (const auto& [image, name] : {std::pair{&left, "left"}, std::pair{&right, "right"}}) {
+    if (image->empty()) throw InputError(fmt::format("{} image is empty", name));
+    if (image->size() != expected) {
+      throw InputError(fmt::format("{} image is {}x{} but the calibration is for {}x{}", name,
+                                   image->cols, image->rows, expected.width, expected.height));
+    }
+  }
+  RangingFrame frame;
+  if (rectifier_) {
+    rectifier_->Rectify(left, right, &frame.left_rectified, &frame.right_rectified);
+  } else {
+    frame.left_rectified = left;
+    frame.right_rectified = right;
+  }
+  // Band: the requested rows plus a margin for the matcher's windows and path aggregation.
+  constexpr int kBandMarginPx = 24;
+  const cv::Range band = rows ? cv::Range(std::max(0, rows->start - kBandMarginPx),
+                                          std::min(expected.height, rows->end + kBandMarginPx))
+                              : cv::Range(0, expected.height);
+  LS_CHECK_MSG(band.end > band.start, "empty row band {}..{}", band.start, band.end);
+  // OpenCV-style matchers leave the leftmost max_disparity columns without an estimate; obstacles
+  // near the robot (large disparity) often sit there. Padding both images on the left by
+  // max_disparity columns lets every pixel whose match lies inside the right image be matched; the
+  // padding is cut off afterwards.
+  const int pad = std::max(0, disparity_range_.max_disparity());
+  cv::Mat left_padded, right_padded;
+  cv::copyMakeBorder(frame.left_rectified.rowRange(band), left_padded, 0, 0, pad, 0,
+                     cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(frame.right_rectified.rowRange(band), right_padded, 0, 0, pad, 0,
+                     cv::BORDER_REPLICATE);
+  const cv::Mat band_disparity =
+      matcher_->Compute(left_padded, right_padded).colRange(pad, pad + expected.width);
+  frame.disparity = cv::Mat(expected, CV_32FC1, cv::Scalar(kInvalidDisparity));
+  band_disparity.copyTo(frame.disparity.rowRange(band));
+  // A match can only lie inside the right image: d <= x.
+  for (int y = band.start; y < band.end; ++y) {
+    float* d = frame.disparity.ptr<float>(y);
+    for (int x = 0; x < expected.width; ++x) {
+      if (IsValidDisparity(d[x]) && d[x] > float(x)) d[x] = kInvalidDisparity;
+    }
+  }
+  return frame;
+}
+
+std::vector<RangeResult> RangingPipeline::RangeRois(const RangingFrame& frame,
+                                                    const std::vector<cv::Rect>& rois) const {
+  std::vector<RangeResult> results;
+  results.reserve(rois.size());
+  for (const cv::Rect& roi : rois)
+    results.push_back(RangeObstacle(frame.disparity, geometry_, roi, options_.ranging));
+  return results;
+}
+
+std::vector<RangeResult> RangingPipeline::RangeAuto(const RangingFrame& frame) const {
+  return RangeAllObstacles(frame.disparity, geometry_, options_.finder, options_.ranging);
+}
+
+}  // namespace linesight
