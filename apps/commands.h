@@ -6,5 +6,9 @@ namespace linesight::cli {
 
 int RunDisparity(int argc, char** argv);
 int RunEval(int argc, char** argv);
+int RunRectify(int argc, char** argv);
+int RunCloud(int argc, char** argv);
+int RunRange(int argc, char** argv);
+int RunEvalRanging(int argc, char** argv);  // `linesight eval ranging`, dispatched by eval.cc
 
 }  // namespace linesight::cli

@@ -18,6 +18,9 @@ constexpr Subcommand kSubcommands[] = {
     {"disparity", linesight::cli::RunDisparity,
      "dense disparity of a stereo pair (PFM / KITTI PNG / colour)"},
     {"eval", linesight::cli::RunEval, "evaluate matchers on public benchmarks (eval stereo)"},
+    {"rectify", linesight::cli::RunRectify, "rectify a raw stereo pair with a calibration (Bouguet)"},
+    {"cloud", linesight::cli::RunCloud, "point cloud (PLY, metres) and depth PNG from a disparity map"},
+    {"range", linesight::cli::RunRange, "distance +- sigma to obstacles in ROIs or found automatically"},
 };
 
 void PrintUsage(std::FILE* out) {

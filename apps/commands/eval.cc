@@ -95,6 +95,7 @@ struct Study {
 
 constexpr Study kStudies[] = {
     {"stereo", RunEvalStereo, "matchers on public benchmarks (Middlebury, KITTI, ETH3D, ...)"},
+    {"ranging", RunEvalRanging, "ranging accuracy on rendered power-line scenes + Middlebury metric depth"},
 };
 
 void PrintEvalUsage(std::FILE* out) {
