@@ -698,14 +698,17 @@ double SurfaceMinDepth(const std::vector<Shape>& shapes, const detail::PosedCame
 
 }  // namespace
 
-PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
+namespace detail {
+
+PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& options) {
   options.Check();
-  PowerLineScene result;
-  result.calibration = MakeStereoCalibration(options.rig);
+  PowerLineSceneModel model;
+  model.calibration = MakeStereoCalibration(options.rig);
   const cv::Size size = options.rig.image_size;
   const LineGeometry line(options);
-  const detail::RigPoses poses = detail::MakeRigPoses(result.calibration, line.left_from_world());
-  const CameraIntrinsics rect_k = detail::RectifiedIntrinsics(result.calibration);
+  model.poses = MakeRigPoses(model.calibration, line.left_from_world());
+  const RigPoses& poses = model.poses;
+  const CameraIntrinsics rect_k = RectifiedIntrinsics(model.calibration);
 
   SceneParts parts;
   AddConductors(options, line, &parts.fixed);
@@ -802,7 +805,23 @@ PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
 
   // Final scene with every obstacle.
   parts.obstacles = placed;
-  AssembleScene(options, parts, placed.size(), &scene);
+  AssembleScene(options, parts, placed.size(), &model.scene);
+  for (const auto& shapes : placed) {
+    model.surface_min_depth.push_back(SurfaceMinDepth(shapes, poses.rectified_left));
+  }
+  return model;
+}
+
+}  // namespace detail
+
+PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
+  const detail::PowerLineSceneModel model = detail::BuildPowerLineSceneModel(options);
+  const detail::RenderScene& scene = model.scene;
+  const detail::RigPoses& poses = model.poses;
+  PowerLineScene result;
+  result.calibration = model.calibration;
+  const cv::Size size = options.rig.image_size;
+  const CameraIntrinsics rect_k = detail::RectifiedIntrinsics(result.calibration);
 
   cv::Mat depth, surface_class, ids;
   detail::TraceGroundTruth(scene, rect_k, poses.rectified_left, size,
@@ -830,7 +849,7 @@ PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
     o.conductor = options.obstacles[i].conductor;
     o.requested_distance_m = options.obstacles[i].distance_m;
     o.distance_m = stats.min_depth;
-    o.surface_min_depth_m = SurfaceMinDepth(placed[i], poses.rectified_left);
+    o.surface_min_depth_m = model.surface_min_depth[i];
     o.nearest_pixel = stats.nearest;
     o.box = stats.box;
     o.visible_pixels = stats.pixels;

@@ -276,20 +276,22 @@ struct ChessboardOptions {
 
 struct CalibrationBoardOptions {
   StereoRigOptions rig;
-  SensorOptions sensor{.supersampling =
-                           4};  // finer anti-aliasing: chessboard corners are sub-pixel targets
+  // Finer anti-aliasing than the scene: chessboard corners are sub-pixel targets.
+  SensorOptions sensor{.supersampling = 4};
   ChessboardOptions board;
   std::uint64_t seed = 1;
-  int num_stereo_views = 15;  // boards fully visible in both cameras (>= 0)
-  int num_left_only =
-      0;  // boards fully visible in the left camera only (partly or not in the right)
-  int num_right_only = 0;        // boards fully visible in the right camera only
-  double min_distance_m = 0.45;  // range of board-centre depth (m)
+  // Boards fully visible (with the border and margin_px) in both cameras.
+  int num_stereo_views = 15;
+  // Boards fully visible in one camera only: the other camera misses >= 2 columns of inner corners.
+  int num_left_only = 0;
+  int num_right_only = 0;
+  // Range of the board-centre depth in the left camera (m).
+  double min_distance_m = 0.45;
   double max_distance_m = 1.4;
-  double max_tilt_deg =
-      40.0;  // maximum angle between the board normal and the viewing direction (deg)
-  double margin_px =
-      8.0;  // every board corner (incl. border) at least this far inside a "visible" image
+  // Maximum angle between the board normal and the line of sight (deg).
+  double max_tilt_deg = 40.0;
+  // Every outer board corner lies at least this far inside an image that "sees" the board (px).
+  double margin_px = 8.0;
 
   void Check() const;
 };

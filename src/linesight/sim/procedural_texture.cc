@@ -13,11 +13,11 @@ std::uint64_t Mix64(std::uint64_t x) {
 }
 
 double LatticeHash(std::int64_t x, std::int64_t y, std::int64_t z, std::uint64_t seed) {
-  std::uint64_t h = Mix64(seed ^ 0x51ed270b27a1c3d5ULL);
-  h = Mix64(h ^ static_cast<std::uint64_t>(x));
-  h = Mix64(h ^ static_cast<std::uint64_t>(y));
-  h = Mix64(h ^ static_cast<std::uint64_t>(z));
-  return static_cast<double>(h >> 11) * (1.0 / 9007199254740992.0);
+  // One mixing round over a linear combination with large odd constants is plenty for textures.
+  const std::uint64_t key = static_cast<std::uint64_t>(x) * 0x9e3779b97f4a7c15ULL +
+                            static_cast<std::uint64_t>(y) * 0xc2b2ae3d27d4eb4fULL +
+                            static_cast<std::uint64_t>(z) * 0x165667b19e3779f9ULL + seed;
+  return static_cast<double>(Mix64(key) >> 11) * (1.0 / 9007199254740992.0);
 }
 
 namespace {

@@ -109,15 +109,15 @@ Vec3 Albedo(const RenderScene& scene, const Shape& shape, Vec3 p) {
       const double y =
           (local.y + 0.5 * (env.board_rows - 1) * env.board_square_m) / env.board_square_m;
       const bool inside = x >= -1 && x <= env.board_cols && y >= -1 && y <= env.board_rows;
-      const double paper = 0.97 + 0.03 * FractalNoise(300.0 * p, 2, seed + 71);
-      if (!inside) return Vec3{0.82, 0.82, 0.80} * paper;
+      const Vec3 white{0.82, 0.82, 0.80};
+      if (!inside) return white;
       const auto cx = static_cast<std::int64_t>(std::floor(x));
       const auto cy = static_cast<std::int64_t>(std::floor(y));
       const bool black = ((cx + cy) % 2 + 2) % 2 == 0;
-      return black ? Vec3{0.035, 0.035, 0.04} : Vec3{0.82, 0.82, 0.80} * paper;
+      return black ? Vec3{0.035, 0.035, 0.04} : white;
     }
     case Material::kWall: {
-      const double grain = FractalNoise(6.0 * p, 5, seed + 81);
+      const double grain = FractalNoise(6.0 * p, 3, seed + 81);
       return Vec3{0.42, 0.40, 0.37} * (0.7 + 0.5 * grain);
     }
   }
@@ -214,17 +214,25 @@ cv::Mat RenderLinearImage(const RenderScene& scene, const CameraIntrinsics& intr
   cv::Mat refine = cv::Mat::zeros(size, CV_8UC1);
   for (int v = 0; v < size.height; ++v) {
     const auto* index = shape_index.ptr<int>(v);
+    const auto* colour = image.ptr<cv::Vec3f>(v);
     auto* mark = refine.ptr<unsigned char>(v);
     for (int u = 0; u < size.width; ++u) {
       const int id = index[u];
-      bool needed = id >= 0 && scene.geometry.shape(id).material != Material::kWall;
+      const Material material = id >= 0 ? scene.geometry.shape(id).material : Material::kWall;
+      // Flat-coloured regions (sky, ground, wall, chessboard squares) only need it at edges:
+      // another shape, or for the chessboard another colour, next door.
+      const bool flat = id < 0 || material == Material::kWall || material == Material::kChessboard;
+      bool needed = !flat;
       for (int dv = -1; dv <= 1 && !needed; ++dv) {
         const int vv = v + dv;
         if (vv < 0 || vv >= size.height) continue;
         const auto* row = shape_index.ptr<int>(vv);
+        const auto* row_colour = image.ptr<cv::Vec3f>(vv);
         for (int du = -1; du <= 1; ++du) {
           const int uu = u + du;
-          if (uu >= 0 && uu < size.width && row[uu] != id) {
+          if (uu < 0 || uu >= size.width) continue;
+          if (row[uu] != id || (material == Material::kChessboard &&
+                                std::fabs(row_colour[uu][1] - colour[u][1]) > 0.1f)) {
             needed = true;
             break;
           }

@@ -8,6 +8,7 @@
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/sim/camera_model.h"
 #include "linesight/sim/power_line_scene.h"
+#include "linesight/sim/scene_render.h"
 
 namespace linesight::sim::detail {
 
@@ -28,6 +29,16 @@ CameraIntrinsics RectifiedIntrinsics(const StereoCalibration& calib);
 // Poses of all four cameras in a world frame given the left camera's orientation in it (the left
 // camera centre is the world origin).
 RigPoses MakeRigPoses(const StereoCalibration& calib, const Mat3& left_from_world);
+
+// The geometry of a power-line scene with its obstacles placed, ready to render (world frame:
+// origin at the left camera centre, y along gravity).
+struct PowerLineSceneModel {
+  StereoCalibration calibration;
+  RigPoses poses;
+  RenderScene scene;
+  std::vector<double> surface_min_depth;  // per obstacle spec: min Z_rect over its surface
+};
+PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& options);
 
 // Creates `dir` (and parents) or throws InputError naming it.
 void CreateOutputDirectory(const std::filesystem::path& dir);
