@@ -39,6 +39,8 @@ int RunEvalStereo(int argc, char** argv) {
   std::string data_dir, methods_text = "sgbm,bm", json_path, plots_dir, save_dir, markdown_path;
   std::vector<std::string> raw_params;
   std::vector<std::string> only_sets;
+  std::vector<std::string> noise_texts = {"clean"};
+  uint64_t noise_seed = 1;
   int threads = 0;
   app.add_option("--data", data_dir, "folder holding benchmark scenes (searched recursively)")
       ->required();
@@ -48,6 +50,12 @@ int RunEvalStereo(int argc, char** argv) {
   app.add_option("--sets", only_sets, "only these sets (folder names), comma-separated")
       ->delimiter(',');
   AddParamOption(app, &raw_params);
+  app.add_option("--noise", noise_texts,
+                 "noise settings, comma-separated: clean, gauss:VARIANCE, sp:DENSITY (on [0,1] "
+                 "intensities, e.g. clean,gauss:0.1,gauss:0.2,sp:0.15,sp:0.35)")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--noise-seed", noise_seed, "seed of the image noise")->capture_default_str();
   app.add_option("--threads", threads, "matcher threads (0 = all cores)")->capture_default_str();
   app.add_option("--json", json_path, "JSON report (- for stdout)");
   app.add_option("--markdown", markdown_path, "also write the markdown tables to this file");
@@ -59,6 +67,9 @@ int RunEvalStereo(int argc, char** argv) {
     options.methods = SplitComma(methods_text);
     options.params = ParseParams(raw_params);
     options.threads = threads;
+    options.noise.clear();
+    for (const std::string& text : noise_texts) options.noise.push_back(NoiseSpec::Parse(text));
+    options.noise_seed = noise_seed;
     options.save_disparity_dir = save_dir;
     options.plots_dir = plots_dir;
     for (const auto& dir : {save_dir, plots_dir}) {
@@ -84,6 +95,7 @@ int RunEvalStereo(int argc, char** argv) {
     std::cout << markdown << std::flush;
     if (!markdown_path.empty()) WriteTextAtomic(markdown_path, markdown);
     if (!json_path.empty()) WriteJson(json_path, report.ToJson());
+    if (!plots_dir.empty()) report.WritePlots(plots_dir);
   });
 }
 
@@ -95,7 +107,8 @@ struct Study {
 
 constexpr Study kStudies[] = {
     {"stereo", RunEvalStereo, "matchers on public benchmarks (Middlebury, KITTI, ETH3D, ...)"},
-    {"ranging", RunEvalRanging, "ranging accuracy on rendered power-line scenes + Middlebury metric depth"},
+    {"ranging", RunEvalRanging,
+     "ranging accuracy on rendered power-line scenes + Middlebury metric depth"},
 };
 
 void PrintEvalUsage(std::FILE* out) {

@@ -1,6 +1,7 @@
 #include "linesight/eval/eval_stereo.h"
 
 #include <algorithm>
+#include <limits>
 #include <set>
 
 #include <fmt/format.h>
@@ -9,6 +10,7 @@
 #include "linesight/core/error.h"
 #include "linesight/core/progress.h"
 #include "linesight/core/timer.h"
+#include "linesight/eval/plot.h"
 #include "linesight/io/disparity_io.h"
 #include "linesight/io/image_io.h"
 #include "linesight/io/pfm.h"
@@ -38,9 +40,18 @@ std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, s
   return out;
 }
 
+// FNV-1a: a stable hash so that the noise of a scene does not depend on the order scenes are run
+// in.
+uint64_t StableHash(const std::string& text, uint64_t seed) {
+  uint64_t h = 1469598103934665603ull ^ seed;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
 void SaveOutputs(const EvalStereoOptions& options, const StereoScene& scene,
-                 const std::string& method, const cv::Mat& disparity) {
-  const fs::path rel = fs::path(scene.ref.set) / scene.ref.name;
+                 const std::string& noise, const std::string& method, const cv::Mat& disparity) {
+  fs::path rel = fs::path(scene.ref.set) / scene.ref.name;
+  if (noise != "clean") rel /= noise;
   if (!options.save_disparity_dir.empty()) {
     const fs::path dir = options.save_disparity_dir / rel;
     fs::create_directories(dir);
@@ -89,34 +100,45 @@ EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
   EvalStereoReport report;
   for (const SceneRef& ref : scenes) {
     const StereoScene scene = LoadScene(ref);
-    for (const std::string& method : options.methods) {
-      MatcherOptions matcher_options;
-      matcher_options.min_disparity = scene.min_disparity;
-      matcher_options.num_disparities = scene.num_disparities;
-      matcher_options.threads = options.threads;
-      matcher_options.params = ParamsForMethod(options.params, method);
-      auto matcher = CreateMatcher(method, matcher_options);
-      Stopwatch watch;
-      const cv::Mat disparity = matcher->Compute(scene.left, scene.right);
-      const double ms = watch.ElapsedMs();
+    for (const NoiseSpec& noise : options.noise) {
+      const std::string noise_label = noise.Label();
+      const std::string scene_key = ref.set + "/" + ref.name + "/" + noise_label;
+      const cv::Mat left =
+          AddImageNoise(scene.left, noise, StableHash(scene_key + "/left", options.noise_seed));
+      const cv::Mat right =
+          AddImageNoise(scene.right, noise, StableHash(scene_key + "/right", options.noise_seed));
+      for (const std::string& method : options.methods) {
+        MatcherOptions matcher_options;
+        matcher_options.min_disparity = scene.min_disparity;
+        matcher_options.num_disparities = scene.num_disparities;
+        matcher_options.threads = options.threads;
+        matcher_options.params = ParamsForMethod(options.params, method);
+        auto matcher = CreateMatcher(method, matcher_options);
+        Stopwatch watch;
+        const cv::Mat disparity = matcher->Compute(left, right);
+        const double ms = watch.ElapsedMs();
 
-      EvalStereoResult result;
-      result.set = ref.set;
-      result.scene = ref.name;
-      result.method = method;
-      result.width = scene.left.cols;
-      result.height = scene.left.rows;
-      result.min_disparity = scene.min_disparity;
-      result.num_disparities = scene.num_disparities;
-      result.ms = ms;
-      result.mde_s = MdePerSecond(result.width, result.height, result.num_disparities, ms);
-      result.settings = matcher->Settings();
-      for (const auto& [region, mask] : scene.masks) {
-        result.regions[region] = ComputeDisparityMetrics(disparity, scene.ground_truth, mask);
+        EvalStereoResult result;
+        result.set = ref.set;
+        result.scene = ref.name;
+        result.method = method;
+        result.noise = noise_label;
+        result.width = scene.left.cols;
+        result.height = scene.left.rows;
+        result.min_disparity = scene.min_disparity;
+        result.num_disparities = scene.num_disparities;
+        result.ms = ms;
+        result.mde_s = MdePerSecond(result.width, result.height, result.num_disparities, ms);
+        result.settings = matcher->Settings();
+        for (const auto& [region, mask] : scene.masks) {
+          result.regions[region] = ComputeDisparityMetrics(disparity, scene.ground_truth, mask);
+        }
+        SaveOutputs(options, scene, noise_label, method, disparity);
+        report.results.push_back(std::move(result));
+        if (progress) {
+          progress->Advance(1, fmt::format("{}/{} {} {}", ref.set, ref.name, noise_label, method));
+        }
       }
-      SaveOutputs(options, scene, method, disparity);
-      report.results.push_back(std::move(result));
-      if (progress) progress->Advance(1, fmt::format("{}/{} {}", ref.set, ref.name, method));
     }
   }
   return report;
@@ -131,6 +153,7 @@ nlohmann::json EvalStereoReport::ToJson() const {
     scenes.push_back({{"set", r.set},
                       {"scene", r.scene},
                       {"method", r.method},
+                      {"noise", r.noise},
                       {"width", r.width},
                       {"height", r.height},
                       {"min_disparity", r.min_disparity},
@@ -144,58 +167,122 @@ nlohmann::json EvalStereoReport::ToJson() const {
   return {{"scenes", scenes}};
 }
 
+namespace {
+
+template <typename Key>
+std::vector<std::string> UniqueInOrder(const std::vector<EvalStereoResult>& results, Key key) {
+  std::vector<std::string> out;
+  for (const auto& r : results) {
+    const std::string k = key(r);
+    if (std::find(out.begin(), out.end(), k) == out.end()) out.push_back(k);
+  }
+  return out;
+}
+
+// Mean headline figure of `method` at `noise` over all scenes (averaged per set first, then over
+// sets, so a set with many scenes does not dominate). NaN when nothing matched.
+double MeanPrimary(const std::vector<EvalStereoResult>& results, const std::string& method,
+                   const std::string& noise) {
+  std::map<std::string, std::pair<double, int>> per_set;
+  for (const auto& r : results) {
+    if (r.method != method || r.noise != noise) continue;
+    auto& [sum, n] = per_set[r.set];
+    sum += PrimaryMetricFor(r).value;
+    ++n;
+  }
+  if (per_set.empty()) return std::numeric_limits<double>::quiet_NaN();
+  double total = 0;
+  for (const auto& [set, acc] : per_set) total += acc.first / acc.second;
+  return total / static_cast<double>(per_set.size());
+}
+
+}  // namespace
+
 std::string EvalStereoReport::ToMarkdown() const {
   std::string out;
-  std::vector<std::string> sets;
-  for (const auto& r : results) {
-    if (std::find(sets.begin(), sets.end(), r.set) == sets.end()) sets.push_back(r.set);
-  }
+  const auto sets = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.set; });
+  const auto noises = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.noise; });
+  const auto methods = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.method; });
   for (const std::string& set : sets) {
-    std::vector<const EvalStereoResult*> rows;
-    std::vector<std::string> methods;
-    for (const auto& r : results) {
-      if (r.set != set) continue;
-      rows.push_back(&r);
-      if (std::find(methods.begin(), methods.end(), r.method) == methods.end()) {
-        methods.push_back(r.method);
+    for (const std::string& noise : noises) {
+      std::vector<const EvalStereoResult*> rows;
+      for (const auto& r : results) {
+        if (r.set == set && r.noise == noise) rows.push_back(&r);
       }
-    }
-    const std::string primary_label = PrimaryMetricFor(*rows.front()).label;
-    const std::string region = PrimaryMetricFor(*rows.front()).region;
-    out += fmt::format(
-        "### {}\n\nDense metrics (a pixel without an estimate is an error) on region `{}`; "
-        "headline: {}.\n\n",
-        set, region, primary_label);
-    out +=
-        "| scene | method | bad-0.5 | bad-1 | bad-2 | bad-4 | D1 | avgerr | rmse | density | ms | "
-        "MDE/s |\n";
-    out += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-    for (const EvalStereoResult* r : rows) {
-      const DisparityMetrics& m = r->regions.at(region);
-      out += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} | {:.0f} |\n",
-                         r->scene, r->method, Fmt2(m.bad[0]), Fmt2(m.bad[1]), Fmt2(m.bad[2]),
-                         Fmt2(m.bad[3]), Fmt2(m.d1), Fmt2(m.avgerr), Fmt2(m.rmse), Fmt2(m.density),
-                         r->ms, r->mde_s);
-    }
-    out += fmt::format(
-        "\nAverage over {} scene(s):\n\n| method | {} | density | ms |\n|---|---|---|---|\n",
-        rows.size() / methods.size(), primary_label);
-    for (const std::string& method : methods) {
-      double sum = 0, density = 0, ms = 0;
-      int n = 0;
-      for (const EvalStereoResult* r : rows) {
-        if (r->method != method) continue;
-        sum += PrimaryMetricFor(*r).value;
-        density += r->regions.at(region).density;
-        ms += r->ms;
-        ++n;
-      }
+      if (rows.empty()) continue;
+      const PrimaryMetric primary = PrimaryMetricFor(*rows.front());
+      out += fmt::format(
+          "### {}{}\n\nDense metrics (a pixel without an estimate is an error) on region "
+          "`{}`; headline: {}.\n\n",
+          set, noise == "clean" ? "" : " — noise " + noise, primary.region, primary.label);
       out +=
-          fmt::format("| {} | {:.2f} | {:.2f} | {:.1f} |\n", method, sum / n, density / n, ms / n);
+          "| scene | method | bad-0.5 | bad-1 | bad-2 | bad-4 | D1 | avgerr | rmse | density | ms "
+          "| "
+          "MDE/s |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      for (const EvalStereoResult* r : rows) {
+        const DisparityMetrics& m = r->regions.at(primary.region);
+        out += fmt::format(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} | {:.0f} |\n", r->scene,
+            r->method, Fmt2(m.bad[0]), Fmt2(m.bad[1]), Fmt2(m.bad[2]), Fmt2(m.bad[3]), Fmt2(m.d1),
+            Fmt2(m.avgerr), Fmt2(m.rmse), Fmt2(m.density), r->ms, r->mde_s);
+      }
+      out += fmt::format(
+          "\nAverage over the set:\n\n| method | {} | density | ms |\n|---|---|---|---|\n",
+          primary.label);
+      for (const std::string& method : methods) {
+        double sum = 0, density = 0, ms = 0;
+        int n = 0;
+        for (const EvalStereoResult* r : rows) {
+          if (r->method != method) continue;
+          sum += PrimaryMetricFor(*r).value;
+          density += r->regions.at(primary.region).density;
+          ms += r->ms;
+          ++n;
+        }
+        if (n == 0) continue;
+        out += fmt::format("| {} | {:.2f} | {:.2f} | {:.1f} |\n", method, sum / n, density / n,
+                           ms / n);
+      }
+      out += "\n";
+    }
+  }
+  if (noises.size() > 1) {
+    out +=
+        "### Noise robustness\n\nHeadline error of each set (dense, %), averaged per set and then "
+        "over "
+        "sets:\n\n| method |";
+    for (const std::string& noise : noises) out += " " + noise + " |";
+    out += "\n|---|";
+    for (size_t i = 0; i < noises.size(); ++i) out += "---|";
+    out += "\n";
+    for (const std::string& method : methods) {
+      out += "| " + method + " |";
+      for (const std::string& noise : noises) {
+        out += fmt::format(" {:.2f} |", MeanPrimary(results, method, noise));
+      }
+      out += "\n";
     }
     out += "\n";
   }
   return out;
+}
+
+void EvalStereoReport::WritePlots(const fs::path& dir) const {
+  const auto noises = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.noise; });
+  const auto methods = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.method; });
+  if (noises.size() < 2) return;
+  LineChart chart;
+  chart.title = "Error vs image noise";
+  chart.x_label = "noise (gauss: variance, sp: density)";
+  chart.y_label = "headline bad-pixel % (mean over sets)";
+  chart.x_ticks = noises;
+  for (const std::string& method : methods) {
+    PlotSeries series{method, {}};
+    for (const std::string& noise : noises) series.y.push_back(MeanPrimary(results, method, noise));
+    chart.series.push_back(series);
+  }
+  fs::create_directories(dir);
+  WriteSvg(dir / "noise.svg", chart);
 }
 
 }  // namespace linesight

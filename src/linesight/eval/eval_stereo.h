@@ -11,6 +11,7 @@
 
 #include "linesight/eval/dataset.h"
 #include "linesight/eval/metrics.h"
+#include "linesight/eval/noise.h"
 
 namespace linesight {
 
@@ -21,15 +22,25 @@ struct EvalStereoOptions {
   // Method parameters: "method.key" applies to that method only, a plain "key" to every method
   // (each method then must know it).
   std::map<std::string, std::string> params;
-  int threads = 0;                           // matcher threads, 0 = all cores
-  std::filesystem::path save_disparity_dir;  // if set: <dir>/<set>/<scene>/<method>.pfm
-  std::filesystem::path plots_dir;  // if set: colour disparity and error maps per scene/method
+  int threads = 0;  // matcher threads, 0 = all cores
+  // Noise settings; every method runs on every scene at each. Both images get independent noise
+  // from a seed derived from `noise_seed`, the scene and the view, so every method sees the same
+  // noisy pair.
+  std::vector<NoiseSpec> noise = {NoiseSpec()};
+  uint64_t noise_seed = 1;
+  // If set: <dir>/<set>/<scene>/<method>.pfm (noisy runs:
+  // <dir>/<set>/<scene>/<noise>/<method>.pfm).
+  std::filesystem::path save_disparity_dir;
+  // If set: colour disparity and error maps per scene/method (same folder scheme), and summary
+  // plots.
+  std::filesystem::path plots_dir;
 
   void Check() const;
 };
 
 struct EvalStereoResult {
   std::string set, scene, method;
+  std::string noise = "clean";  // NoiseSpec::Label()
   int width = 0, height = 0, min_disparity = 0, num_disparities = 0;
   double ms = 0;     // wall time of Compute (one run, includes first-use allocation)
   double mde_s = 0;  // width * height * num_disparities / (ms / 1000) / 1e6
@@ -51,8 +62,13 @@ PrimaryMetric PrimaryMetricFor(const EvalStereoResult& result);
 struct EvalStereoReport {
   std::vector<EvalStereoResult> results;  // scene-major, then method in the requested order
   nlohmann::json ToJson() const;
-  // One markdown table per set (rows scene x method) followed by the per-set averages per method.
+  // One markdown table per set and noise setting (rows scene x method) followed by the per-set
+  // averages per method, and, when several noise settings ran, a method x noise table of the
+  // average headline figure.
   std::string ToMarkdown() const;
+  // Plots into `dir`: noise.svg (headline error vs noise per method) when several noise settings
+  // ran.
+  void WritePlots(const std::filesystem::path& dir) const;
 };
 
 // Loads each scene, runs every method, computes the metrics. Throws InputError/UsageError for bad
