@@ -106,11 +106,11 @@ void TriangulateMidpointT(const T* left_normalized, const T* right_normalized,
 // recon: scaled difference between the triangulated corner and the board point in the left frame.
 struct ReconstructionPointResidual {
   ReconstructionPointResidual(const Eigen::Vector2d& left_pixel, const Eigen::Vector2d& right_pixel,
-                              const Eigen::Vector3d& board_point, const Eigen::Vector3d& scale)
+                              const Eigen::Vector3d& board_point, double weight)
       : left_pixel_(left_pixel),
         right_pixel_(right_pixel),
         board_point_(board_point),
-        scale_(scale) {}
+        weight_(weight) {}
 
   template <typename T>
   bool operator()(const T* left_intrinsics, const T* right_intrinsics, const T* left_from_board,
@@ -122,21 +122,41 @@ struct ReconstructionPointResidual {
     const T board[3] = {T(board_point_.x()), T(board_point_.y()), T(board_point_.z())};
     T expected[3];
     TransformPoint(left_from_board, board, expected);
-    for (int k = 0; k < 3; ++k) residual[k] = T(scale_[k]) * (triangulated[k] - expected[k]);
+    // Pixel-equivalent units with the current focal length and baseline, split along and across the
+    // left viewing ray: the error across the ray is a lateral image error (f/D), the error along it
+    // a disparity error (f·B/D²). The split keeps the depth noise (large, along the ray) out of the
+    // lateral part, and the current f and B keep the residual's spread independent of the
+    // parameters; without either the optimiser lowers the term by biasing f and B instead of
+    // fitting the data.
+    const T focal = left_intrinsics[kFx];
+    const T baseline =
+        sqrt(right_from_left[3] * right_from_left[3] + right_from_left[4] * right_from_left[4] +
+             right_from_left[5] * right_from_left[5]);
+    const T range =
+        sqrt(expected[0] * expected[0] + expected[1] * expected[1] + expected[2] * expected[2]);
+    T difference[3], along = T(0);
+    for (int k = 0; k < 3; ++k) {
+      difference[k] = triangulated[k] - expected[k];
+      along += difference[k] * expected[k] / range;
+    }
+    for (int k = 0; k < 3; ++k) {
+      residual[k] = T(weight_) * focal * (difference[k] - along * expected[k] / range) / range;
+    }
+    residual[3] = T(weight_) * focal * baseline * along / (range * range);
     return true;
   }
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& left_pixel,
                                      const Eigen::Vector2d& right_pixel,
-                                     const Eigen::Vector3d& board_point,
-                                     const Eigen::Vector3d& scale) {
-    return new ceres::AutoDiffCostFunction<ReconstructionPointResidual, 3, kNumIntrinsics,
+                                     const Eigen::Vector3d& board_point, double weight) {
+    return new ceres::AutoDiffCostFunction<ReconstructionPointResidual, 4, kNumIntrinsics,
                                            kNumIntrinsics, kPoseSize, kPoseSize>(
-        new ReconstructionPointResidual(left_pixel, right_pixel, board_point, scale));
+        new ReconstructionPointResidual(left_pixel, right_pixel, board_point, weight));
   }
 
   Eigen::Vector2d left_pixel_, right_pixel_;
-  Eigen::Vector3d board_point_, scale_;
+  Eigen::Vector3d board_point_;
+  double weight_;
 };
 
 // recon: scaled error of the distance between two triangulated adjacent corners.

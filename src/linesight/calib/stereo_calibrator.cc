@@ -62,7 +62,8 @@ MonoEstimate InitializeMono(const BoardGeometry& board, const std::vector<ViewOb
     homographies.push_back(EstimateHomography(board_xy, views[v].pixels));
     view_of_homography.push_back(v);
   }
-  const ClosedFormIntrinsics closed = IntrinsicsFromHomographies(homographies, image_size, name);
+  const ClosedFormIntrinsics closed = IntrinsicsFromHomographies(
+      homographies, image_size, name, options.min_closed_form_conditioning);
   MonoEstimate out;
   out.intrinsics.params[kFx] = closed.camera_matrix(0, 0);
   out.intrinsics.params[kFy] = closed.camera_matrix(1, 1);
@@ -133,7 +134,6 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
   problem.AddParameterBlock(right_from_left, kPoseSize);
   const BoardGeometry& board = obs.board;
   const double f0 = result->left.fx();
-  const double baseline0 = result->right_from_left.Translation().norm();
   for (size_t v = 0; v < obs.size(); ++v) {
     const ViewObservations& left = obs.left[v];
     const ViewObservations& right = obs.right[v];
@@ -172,13 +172,10 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
     const Pose& left_from_board = *result->left_from_board[v];
     if (options.recon_point_weight > 0) {
       for (const auto& [id, pixels] : common) {
-        const double depth = std::max(left_from_board.Apply(board.points[id]).z(), 1e-6);
-        const double w = options.recon_point_weight;
-        const Eigen::Vector3d scale(w * f0 / depth, w * f0 / depth,
-                                    w * f0 * baseline0 / (depth * depth));
-        problem.AddResidualBlock(ReconstructionPointResidual::Create(pixels.first, pixels.second,
-                                                                     board.points[id], scale),
-                                 nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
+        problem.AddResidualBlock(
+            ReconstructionPointResidual::Create(pixels.first, pixels.second, board.points[id],
+                                                options.recon_point_weight),
+            nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
       }
     }
     if (options.recon_distance_weight > 0) {
@@ -391,6 +388,9 @@ void StereoCalibrationOptions::Check() const {
   CheckOption(min_normal_angle_deg >= 0 && min_normal_angle_deg < 90,
               "StereoCalibrationOptions.min_normal_angle_deg", min_normal_angle_deg,
               "must be in [0, 90)");
+  CheckOption(min_closed_form_conditioning >= 0 && min_closed_form_conditioning < 1,
+              "StereoCalibrationOptions.min_closed_form_conditioning", min_closed_form_conditioning,
+              "must be in [0, 1)");
   CheckOption(max_iterations >= 1, "StereoCalibrationOptions.max_iterations", max_iterations,
               "must be >= 1");
   CheckOption(function_tolerance > 0 && function_tolerance < 1,

@@ -12,17 +12,21 @@
 //                camera frame and right_from_left is the rigid alignment of the two
 //                centroid-subtracted point sets (Kabsch/Umeyama via SVD, det(R) = +1 enforced). The
 //                joint refinement minimises
-//                  Σ |reprojection residual|²                                   (px², both images)
-//                + w_p² Σ |S_i (X̂_i − left_from_board·P_i)|²                    (3D point term)
-//                + w_d² Σ (f₀/Z̄_ij)² (|X̂_i − X̂_j| − |P_i − P_j|)²              (adjacent-distance
-//                term) where X̂ is the midpoint triangulation of a corner from its left and right
-//                pixels with the current parameters (undistorted inside the cost), P the known
-//                board point, S_i = diag(f₀/Z_i, f₀/Z_i, f₀·B₀/Z_i²) turns the 3D error into
-//                pixel-equivalent units (lateral error as seen by the left camera, depth error as
-//                disparity), with f₀, B₀, Z_i from the initial estimate and held fixed. Defaults
-//                w_p = w_d = 1: a 3D residual counts like one more pixel observation, so the metric
-//                board geometry pins the focal length against the board distance and the principal
-//                point against the rotation.
+//                  Σ |reprojection residual|²                                     (px², both
+//                  images)
+//                + w_p² Σ [ (f/D_i)² |Δ_i⊥|² + (f·B/D_i²)² (Δ_i∥)² ]              (3D point term)
+//                + w_d² Σ (f₀/Z̄_ij)² (|X̂_i − X̂_j| − |P_i − P_j|)²                (adjacent-distance
+//                term) where X̂_i is the midpoint triangulation of corner i from its left and right
+//                pixels with the current parameters (undistorted inside the cost), Δ_i = X̂_i −
+//                left_from_board·P_i its distance from the known board point, split into the part
+//                across the left viewing ray (Δ⊥, scaled by f/D into a lateral image error in px)
+//                and along it (Δ∥, scaled by f·B/D² into a disparity error in px); D_i =
+//                |left_from_board·P_i|, f = left fx and B = |T| are the current values, so each 3D
+//                residual has about the spread of one pixel residual whatever the parameters (a
+//                fixed or a per-axis scale lets the optimiser shrink the apparent depth noise by
+//                biasing f and B: +10 px in fx in the simulation). Defaults w_p = 1, w_d = 0: the
+//                distance term is biased under noise (E|X̂_i − X̂_j| exceeds the true length) and
+//                pulled fx 5 % low in the simulation, so it is available but off.
 // opencv         cv::calibrateCamera per camera, then
 // cv::stereoCalibrate(CALIB_USE_INTRINSIC_GUESS) on the
 //                pair views; board poses are refined afterwards (pose only, OpenCV's parameters
@@ -75,12 +79,15 @@ struct DistortionModel {
 struct StereoCalibrationOptions {
   CalibrationMethod method = CalibrationMethod::kZhang;
   DistortionModel distortion;
-  int min_views = 3;                  // fewest views per camera and fewest pair views
-  double min_normal_angle_deg = 3;    // degenerate if all board normals lie within this angle (deg)
+  int min_views = 3;                // fewest views per camera and fewest pair views
+  double min_normal_angle_deg = 3;  // degenerate if all board normals lie within this angle (deg)
+  // Degenerate if σ5/σ1 of Zhang's constraint matrix is below this (all boards parallel: ~1e-3).
+  double min_closed_form_conditioning = 5e-3;
   int max_iterations = 200;           // Levenberg-Marquardt iterations per solve
   double function_tolerance = 1e-12;  // relative cost change that stops LM
   double recon_point_weight = 1.0;    // w_p of the recon objective (see above), >= 0
-  double recon_distance_weight = 1.0;  // w_d of the recon objective, >= 0
+  double recon_distance_weight =
+      0.0;  // w_d of the recon objective, >= 0 (biased under noise, see above)
 
   void Check() const;
 };

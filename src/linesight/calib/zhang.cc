@@ -57,8 +57,8 @@ Eigen::Matrix3d EstimateHomography(const std::vector<Eigen::Vector2d>& board_xy,
 }
 
 ClosedFormIntrinsics IntrinsicsFromHomographies(const std::vector<Eigen::Matrix3d>& homographies,
-                                                cv::Size image_size,
-                                                const std::string& camera_name) {
+                                                cv::Size image_size, const std::string& camera_name,
+                                                double min_conditioning) {
   if (homographies.size() < 2) {
     throw InputError(fmt::format("{}: {} usable views, need at least 2 for the closed form",
                                  camera_name, homographies.size()));
@@ -92,9 +92,10 @@ ClosedFormIntrinsics IntrinsicsFromHomographies(const std::vector<Eigen::Matrix3
                     "parallel",
                     camera_name, why));
   };
-  if (out.conditioning < 1e-6) {
-    throw degenerate(fmt::format("closed-form constraints have rank < 5, conditioning {:.2e}",
-                                 out.conditioning));
+  if (!(out.conditioning >= min_conditioning)) {
+    throw degenerate(
+        fmt::format("closed-form constraints nearly rank-deficient, conditioning {:.2e} < {:.1e}",
+                    out.conditioning, min_conditioning));
   }
   Eigen::VectorXd b = svd.matrixV().col(5);
   if (b[0] < 0) b = -b;

@@ -1,0 +1,206 @@
+#include "linesight/calib/stereo_calibrator.h"
+
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <Eigen/Dense>
+
+#include "linesight/calib/calibration_report.h"
+#include "linesight/calib/simulation.h"
+#include "linesight/core/error.h"
+
+namespace linesight::calib {
+namespace {
+
+StereoCalibrationOptions Options(CalibrationMethod method) {
+  StereoCalibrationOptions options;
+  options.method = method;
+  options.distortion.fix_k3 = true;
+  return options;
+}
+
+TEST(StereoCalibrationOptions, DefaultsAreValidAndBoundariesRejected) {
+  EXPECT_NO_THROW(StereoCalibrationOptions().Check());
+  StereoCalibrationOptions o;
+  o.min_views = 2;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = {};
+  o.recon_point_weight = -1;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = {};
+  o.min_normal_angle_deg = 90;
+  EXPECT_THROW(o.Check(), OptionError);
+  EXPECT_NO_THROW(CalibrationStudyOptions().Check());
+  EXPECT_NO_THROW(BoardPoseOptions().Check());
+}
+
+TEST(ParseMethod, NamesRoundTrip) {
+  for (auto m :
+       {CalibrationMethod::kZhang, CalibrationMethod::kRecon, CalibrationMethod::kOpenCV}) {
+    EXPECT_EQ(ParseMethod(MethodName(m)), m);
+  }
+  EXPECT_THROW(ParseMethod("tsai"), UsageError);
+}
+
+TEST(AlignPointSets, RecoversRigidMotionWithProperRotation) {
+  Pose truth;
+  truth.params = {0.2, -0.4, 0.1, 0.3, -0.1, 0.05};
+  std::vector<Eigen::Vector3d> a, b;
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Vector3d p(std::sin(i), std::cos(3 * i), 0.1 * i);
+    a.push_back(p);
+    b.push_back(truth.Apply(p));
+  }
+  const Pose estimate = AlignPointSets(a, b);
+  for (int i = 0; i < kPoseSize; ++i) EXPECT_NEAR(estimate.params[i], truth.params[i], 1e-9);
+  // A mirrored point set must still give a rotation (det = +1), never a reflection.
+  std::vector<Eigen::Vector3d> mirrored;
+  for (const auto& p : a) mirrored.emplace_back(-p.x(), p.y(), p.z());
+  EXPECT_NEAR(AlignPointSets(a, mirrored).Rotation().determinant(), 1.0, 1e-9);
+}
+
+TEST(CalibrateStereo, RecoversTheRigExactlyWithoutNoise) {
+  const SimulationRig rig = DefaultSimulationRig();
+  std::mt19937_64 rng(7);
+  const auto poses = RandomBoardPoses(rig, 8, BoardPoseOptions(), rng);
+  const StereoObservations obs = SynthesizeObservations(rig, poses, 0.0, rng);
+  for (auto method :
+       {CalibrationMethod::kZhang, CalibrationMethod::kRecon, CalibrationMethod::kOpenCV}) {
+    SCOPED_TRACE(MethodName(method));
+    const StereoCalibrationResult r = CalibrateStereo(obs, Options(method));
+    for (int i : {kFx, kFy, kCx, kCy}) {
+      EXPECT_NEAR(r.left.params[i], rig.left.params[i], 1e-3);
+      EXPECT_NEAR(r.right.params[i], rig.right.params[i], 1e-3);
+    }
+    EXPECT_NEAR(r.left.params[kK1], rig.left.params[kK1], 1e-5);
+    for (int i = 0; i < kPoseSize; ++i)
+      EXPECT_NEAR(r.right_from_left.params[i], rig.right_from_left.params[i], 1e-6);
+    EXPECT_LT(StereoRms(obs, r), 1e-4);
+  }
+}
+
+TEST(CalibrateStereo, NoisyEstimateIsConsistentWithTheCramerRaoBound) {
+  const SimulationRig rig = DefaultSimulationRig();
+  std::mt19937_64 rng(11);
+  const auto poses = RandomBoardPoses(rig, 10, BoardPoseOptions(), rng);
+  const double sigma = 0.5;
+  const StereoObservations obs = SynthesizeObservations(rig, poses, sigma, rng);
+  const auto bound =
+      CramerRaoStddev(rig, poses, sigma, Options(CalibrationMethod::kZhang).distortion);
+  for (auto method : {CalibrationMethod::kZhang, CalibrationMethod::kRecon}) {
+    SCOPED_TRACE(MethodName(method));
+    const StereoCalibrationResult r = CalibrateStereo(obs, Options(method));
+    const auto estimate = StudyParameters(r);
+    StereoCalibrationResult truth;
+    truth.left = rig.left;
+    truth.right_from_left = rig.right_from_left;
+    const auto expected = StudyParameters(truth);
+    for (int i = 0; i < kStudyParameterCount; ++i) {
+      EXPECT_GT(bound[i], 0);
+      EXPECT_LT(std::abs(estimate[i] - expected[i]), 5 * bound[i]) << kStudyParameterNames[i];
+    }
+    const CalibrationReport report = EvaluateCalibration(obs, r);
+    // Per-point RMS of the 2D error: σ·√2 per point, less the degrees of freedom of the fit.
+    EXPECT_NEAR(report.stereo_rms_px, sigma * std::sqrt(2.0), 0.05);
+    // The covariance-based standard deviation of fx estimates the bound (same model, σ̂ ≈ σ).
+    EXPECT_NEAR(report.left_stddev[kFx], bound[0], 0.3 * bound[0]);
+    // |Δy| of two N(0, σ²) coordinates: mean σ·√2·√(2/π) ≈ 0.56 px.
+    EXPECT_NEAR(report.epipolar_mean_abs_dy_px, sigma * std::sqrt(2.0) * std::sqrt(2.0 / M_PI),
+                0.06);
+    EXPECT_GT(report.reconstruction_percent, 1.0);  // noise of depth from 0.5 px at ~0.8 m
+    EXPECT_LT(report.reconstruction_percent, 12.0);
+  }
+}
+
+TEST(CalibrateStereo, RejectsBadInput) {
+  const SimulationRig rig = DefaultSimulationRig();
+  std::mt19937_64 rng(5);
+  const auto poses = RandomBoardPoses(rig, 6, BoardPoseOptions(), rng);
+  StereoObservations obs = SynthesizeObservations(rig, poses, 0.1, rng);
+  // Too few views.
+  StereoObservations few = obs;
+  few.left.resize(2);
+  few.right.resize(2);
+  EXPECT_THROW(CalibrateStereo(few, Options(CalibrationMethod::kZhang)), InputError);
+  // No board anywhere.
+  StereoObservations none = obs;
+  for (auto& v : none.left) v = {};
+  for (auto& v : none.right) v = {};
+  try {
+    CalibrateStereo(none, Options(CalibrationMethod::kOpenCV));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no calibration board"), std::string::npos) << e.what();
+  }
+  // All boards parallel (translated only): degenerate for every method.
+  std::vector<Pose> parallel;
+  for (int i = 0; i < 6; ++i) {
+    Pose p = poses[0];
+    p.params[3] += 0.01 * (i % 3) - 0.01;
+    p.params[4] += 0.01 * (i / 3) - 0.005;
+    p.params[5] += 0.02 * i;
+    parallel.push_back(p);
+  }
+  const StereoObservations flat = SynthesizeObservations(rig, parallel, 0.1, rng);
+  for (auto method :
+       {CalibrationMethod::kZhang, CalibrationMethod::kRecon, CalibrationMethod::kOpenCV}) {
+    try {
+      CalibrateStereo(flat, Options(method));
+      FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("degenerate"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The acceptance data set: opencv-doc's 13 chessboard pairs, 9x6 inner corners, unit squares.
+TEST(CalibrateStereo, OpenCVSamplePairs) {
+  const std::filesystem::path dir = LINESIGHT_OPENCV_DATA_DIR;
+  if (!std::filesystem::exists(dir / "left01.jpg"))
+    GTEST_SKIP() << "opencv-doc sample data not installed: " << dir;
+  const PatternSpec spec = ParsePatternSpec("chessboard:9x6:1");
+  const StereoDetections detections = DetectStereoPairs(
+      ExpandGlob((dir / "left[0-9]*.jpg").string()), ExpandGlob((dir / "right[0-9]*.jpg").string()),
+      spec, DetectionOptions(), false);
+  ASSERT_EQ(detections.pairs.size(), 13u);
+  EXPECT_GE(detections.BothCount(), 10);
+  const StereoObservations obs = ObservationsFromDetections(detections, MakeBoardGeometry(spec));
+  {
+    std::vector<Eigen::Matrix3d> homographies;
+    for (const auto& v : obs.left) {
+      if (v.empty()) continue;
+      std::vector<Eigen::Vector2d> xy;
+      for (int id : v.ids) xy.push_back(obs.board.points[id].head<2>());
+      homographies.push_back(EstimateHomography(xy, v.pixels));
+    }
+    const double conditioning =
+        IntrinsicsFromHomographies(homographies, obs.image_size, "left").conditioning;
+    std::printf("closed-form conditioning of the left views: %.4f\n", conditioning);
+    EXPECT_GT(conditioning, 0.01);
+  }
+  std::map<CalibrationMethod, CalibrationReport> reports;
+  for (auto method :
+       {CalibrationMethod::kOpenCV, CalibrationMethod::kZhang, CalibrationMethod::kRecon}) {
+    StereoCalibrationOptions options;
+    options.method = method;
+    const StereoCalibrationResult r = CalibrateStereo(obs, options);
+    reports[method] = EvaluateCalibration(obs, r);
+    if (method == CalibrationMethod::kOpenCV) {
+      EXPECT_NEAR(reports[method].stereo_rms_px, r.method_reported_rms,
+                  0.02 * r.method_reported_rms);
+    }
+  }
+  const double reference = reports[CalibrationMethod::kOpenCV].stereo_rms_px;
+  EXPECT_LT(reports[CalibrationMethod::kZhang].stereo_rms_px, 1.05 * reference);
+  EXPECT_LT(reports[CalibrationMethod::kRecon].stereo_rms_px, 1.05 * reference);
+  EXPECT_LT(reports[CalibrationMethod::kRecon].reconstruction_percent,
+            reports[CalibrationMethod::kOpenCV].reconstruction_percent);
+  for (const auto& [method, report] : reports) {
+    std::printf("%-7s stereo RMS %.4f px  epipolar %.4f px  reconstruction %.3f %%\n",
+                MethodName(method).c_str(), report.stereo_rms_px, report.epipolar_mean_abs_dy_px,
+                report.reconstruction_percent);
+  }
+}
+
+}  // namespace
+}  // namespace linesight::calib
