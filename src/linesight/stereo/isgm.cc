@@ -31,12 +31,9 @@ IsgmMatcher::IsgmMatcher(const IsgmOptions& options) : options_(options), sgm_(o
 IsgmResult IsgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right) {
   IsgmResult result;
   result.sgm = sgm_.ComputeDetailed(left, right);
-  // Superpixels see the image as given (colour if BGR); a 4-channel input is reduced to BGR.
-  cv::Mat left_for_segments = left, right_for_segments = right;
-  if (left.channels() == 4) {
-    left_for_segments = ToGray8(left);
-    right_for_segments = ToGray8(right);
-  }
+  // Superpixels on the grey image: as accurate as 8-bit Lab on every benchmark set we measured
+  // (better on ETH3D, KITTI, Middlebury 2005/2014) at a third of the distance computations.
+  const cv::Mat left_for_segments = ToGray8(left), right_for_segments = ToGray8(right);
   result.disparity =
       RefineDisparityWithPlanes(result.sgm.disparity, left_for_segments, right_for_segments,
                                 options_.refinement, &result.refinement);

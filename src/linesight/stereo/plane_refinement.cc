@@ -29,6 +29,9 @@ void PlaneRefinementOptions::Check() const {
   CheckOption(max_slant > 0, "PlaneRefinementOptions.max_slant", max_slant, "must be > 0 px/px");
   CheckOption(min_surface_coherence >= 0, "PlaneRefinementOptions.min_surface_coherence",
               min_surface_coherence, "must be >= 0");
+  CheckOption(min_second_plane_ratio >= 0 && min_second_plane_ratio <= 1,
+              "PlaneRefinementOptions.min_second_plane_ratio", min_second_plane_ratio,
+              "must be in [0, 1]");
   CheckOption(photometric_radius >= 0, "PlaneRefinementOptions.photometric_radius",
               photometric_radius, "must be >= 0 px (0 = off)");
   CheckOption(photometric_truncation >= 1, "PlaneRefinementOptions.photometric_truncation",
@@ -58,6 +61,7 @@ nlohmann::json PlaneRefinementOptions::ToJson() const {
           {"refit_iterations", refit_iterations},
           {"two_plane_fallback", two_plane_fallback},
           {"min_surface_coherence", min_surface_coherence},
+          {"min_second_plane_ratio", min_second_plane_ratio},
           {"photometric_radius", photometric_radius},
           {"photometric_truncation", photometric_truncation},
           {"adopt_neighbour_planes", adopt_neighbour_planes},
@@ -317,6 +321,7 @@ SegmentModel FitOneSegment(const std::vector<PlanePoint>& points, int segment_si
     RobustPlaneFit second;
     if (FitPlaneRobust(rest, options, seed + 1, &second) && Acceptable(second, options) &&
         second.inliers >= options.min_support && 2 * second.inliers >= rest_count &&
+        second.inliers >= options.min_second_plane_ratio * model.valid &&
         first.inliers + second.inliers >= options.min_inlier_ratio * model.valid &&
         SetCoherence(rest, second.inlier_mask) >= options.min_surface_coherence) {
       model.kind = SegmentModelKind::kTwoPlanes;
@@ -350,13 +355,37 @@ std::vector<SegmentModel> FitSegmentPlanes(const cv::Mat& disparity, const Segme
   return models;
 }
 
+namespace {
+
+// Segments 4-adjacent to `segment`, sorted.
+void AdjacentSegments(const cv::Mat& labels, const SegmentIndex& index, int segment,
+                      std::vector<int32_t>* neighbours) {
+  const int width = labels.cols, height = labels.rows;
+  const int32_t* label = labels.ptr<int32_t>();
+  neighbours->clear();
+  for (int i = index.offsets[segment]; i < index.offsets[segment + 1]; ++i) {
+    const int p = index.pixels[i];
+    const int x = p % width, y = p / width;
+    const int around[4] = {x > 0 ? label[p - 1] : segment, x + 1 < width ? label[p + 1] : segment,
+                           y > 0 ? label[p - width] : segment,
+                           y + 1 < height ? label[p + width] : segment};
+    for (int n : around) {
+      if (n != segment &&
+          std::find(neighbours->begin(), neighbours->end(), n) == neighbours->end()) {
+        neighbours->push_back(n);
+      }
+    }
+  }
+  std::sort(neighbours->begin(), neighbours->end());
+}
+
+}  // namespace
+
 void AdoptNeighbourPlanes(const cv::Mat& disparity, const cv::Mat& labels,
                           const SegmentIndex& index, const PlaneRefinementOptions& options,
                           std::vector<SegmentModel>* models) {
   const int segments = static_cast<int>(models->size());
-  const int width = labels.cols, height = labels.rows;
   LS_CHECK(labels.type() == CV_32SC1 && labels.isContinuous());
-  const int32_t* label = labels.ptr<int32_t>();
   // Candidates come from the models as fitted (not from other adoptions), so the order does not
   // matter.
   const std::vector<SegmentModel> fitted = *models;
@@ -366,21 +395,7 @@ void AdoptNeighbourPlanes(const cv::Mat& disparity, const cv::Mat& labels,
     for (int s = range.start; s < range.end; ++s) {
       if (fitted[s].kind != SegmentModelKind::kNone || fitted[s].valid < 3) continue;
       CollectValidPoints(disparity, index, s, &points);
-      // Adjacent segments (4-neighbourhood), sorted so that ties in the score go to the smaller
-      // label.
-      neighbours.clear();
-      for (int i = index.offsets[s]; i < index.offsets[s + 1]; ++i) {
-        const int p = index.pixels[i];
-        const int x = p % width, y = p / width;
-        const int around[4] = {x > 0 ? label[p - 1] : s, x + 1 < width ? label[p + 1] : s,
-                               y > 0 ? label[p - width] : s, y + 1 < height ? label[p + width] : s};
-        for (int n : around) {
-          if (n != s && std::find(neighbours.begin(), neighbours.end(), n) == neighbours.end()) {
-            neighbours.push_back(n);
-          }
-        }
-      }
-      std::sort(neighbours.begin(), neighbours.end());
+      AdjacentSegments(labels, index, s, &neighbours);  // sorted: ties go to the smaller label
       int best_score = 0;
       DisparityPlane best;
       for (int n : neighbours) {

@@ -33,36 +33,50 @@
 namespace linesight {
 
 struct PlaneRefinementOptions {
-  SuperpixelOptions superpixels;  // segmentation of the left image
-  double inlier_threshold = 1.0;  // px: a disparity within this distance of a plane supports it
-  double outlier_threshold =
-      2.0;  // px: a valid disparity farther than this from its segment's accepted plane
-            // is a mismatch and is replaced by the plane value; >= inlier_threshold
-  int min_support = 10;  // minimum number of valid disparities for fitting a plane, >= 3
-  double min_support_ratio =
-      0.2;  // minimum fraction of a segment's pixels that are valid for a fit, [0, 1]
-  double min_inlier_ratio = 0.65;  // fraction of the valid disparities a plane must explain, (0, 1]
-  double max_residual_rms = 0.6;  // px: RMS residual of the inliers an accepted plane may have, > 0
-  double max_slant = 1.5;         // px/px: largest |a| and |b| of an accepted plane, > 0
-  int ransac_iterations = 40;     // random 3-point hypotheses per segment, >= 0
-  int ransac_max_points =
-      96;  // pixels scored per hypothesis (an even subsample of larger segments), >= 8
-  int refit_iterations = 3;  // least-squares refits on the current inliers, >= 1
-  bool two_plane_fallback =
-      true;  // a segment one plane cannot explain may take two (depth edge inside)
+  // Segmentation of the left image.
+  SuperpixelOptions superpixels;
+  // px: a disparity within this distance of a plane supports it (RANSAC scoring and refits), > 0.
+  double inlier_threshold = 1.0;
+  // px: a valid disparity farther than this from its segment's accepted plane is a mismatch and is
+  // replaced by the plane value, >= inlier_threshold.
+  double outlier_threshold = 2.0;
+  // Minimum number of valid disparities for fitting a plane, >= 3.
+  int min_support = 10;
+  // Minimum fraction of a segment's pixels that must be valid for a fit, in [0, 1].
+  double min_support_ratio = 0.2;
+  // Fraction of a segment's valid disparities that its plane(s) must explain, in (0, 1].
+  double min_inlier_ratio = 0.65;
+  // px: largest RMS residual of the inliers of an accepted plane, > 0.
+  double max_residual_rms = 0.6;
+  // px/px: largest |a| and |b| of an accepted plane, > 0.
+  double max_slant = 1.5;
+  // Random 3-point hypotheses per segment, >= 0 (the fronto-parallel median is always tried).
+  int ransac_iterations = 20;
+  // Pixels scored per hypothesis (an even subsample of larger segments), >= 8.
+  int ransac_max_points = 48;
+  // Least-squares refits on the re-selected inliers, >= 1.
+  int refit_iterations = 3;
+  // A segment that one plane cannot explain may take two (a depth edge inside it).
+  bool two_plane_fallback = true;
   // Mean number of 4-neighbours (0..4) that the second plane's pixels have among themselves: a
   // second surface must be a region (even a 1-px wire scores 2), not scattered mismatches that
-  // happen to agree, >= 0
+  // happen to agree on a plane, >= 0.
   double min_surface_coherence = 1.5;
-  // With the right image: in a two-plane segment each matched pixel takes the plane whose warp
-  // matches the images better over a (2r+1)^2 window restricted to the segment (undoes the
-  // matcher's foreground fattening); radius in px, 0 = off
+  // Fraction of a segment's valid disparities the second plane must explain, in [0, 1]: a thin band
+  // of foreground disparities along the segment border is usually the matcher's foreground
+  // fattening rather than a second surface.
+  double min_second_plane_ratio = 0.0;
+  // px, 0 = off. With the right image: in a two-plane segment each matched pixel takes the plane
+  // whose warp matches the images better over a (2r+1)^2 window restricted to the segment. Off by
+  // default: it measured slightly worse on every benchmark set (README).
   int photometric_radius = 0;
-  int photometric_truncation =
-      30;  // grey levels at which the per-channel absolute difference saturates
-  bool adopt_neighbour_planes =
-      true;                   // segments without a plane try the planes of adjacent segments
-  bool snap_inliers = false;  // also replace valid disparities near the plane by the plane value
+  // Grey levels at which the per-channel absolute difference of the photometric test saturates,
+  // >= 1.
+  int photometric_truncation = 30;
+  // Segments without a plane of their own try the planes of adjacent segments.
+  bool adopt_neighbour_planes = true;
+  // Also replace valid disparities near the plane (within outlier_threshold) by the plane value.
+  bool snap_inliers = false;
 
   void Check() const;
   nlohmann::json ToJson() const;

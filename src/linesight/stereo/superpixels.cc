@@ -55,35 +55,41 @@ void AssignBand(const cv::Mat& features, const std::vector<float>& centres, int 
         if (has_other_col) cells[n++] = gy * grid_x + gx_other;
         if (has_other_row) cells[n++] = gy_other * grid_x + gx;
         if (has_other_row && has_other_col) cells[n++] = gy_other * grid_x + gx_other;
-        // Increasing index order, so that ties go to the smaller index (insertion sort of <= 4).
+        // Increasing index order, so that ties go to the smaller index (insertion sort of <= 4);
+        // missing neighbours (image border) repeat the last candidate, which never wins a tie.
         for (int i = 1; i < n; ++i) {
           for (int j = i; j > 0 && cells[j - 1] > cells[j]; --j) std::swap(cells[j - 1], cells[j]);
         }
+        for (int i = n; i < 4; ++i) cells[i] = cells[n - 1];
         float row_term[4], cx[4], cf[4][kChannels];
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i < 4; ++i) {
           const float* c = &centres[static_cast<size_t>(cells[i]) * kStride];
           const float dy = static_cast<float>(y) - c[1];
           cx[i] = c[0];
           row_term[i] = spatial_weight * dy * dy;
           for (int ch = 0; ch < kChannels; ++ch) cf[i][ch] = c[2 + ch];
         }
+        // Branch-free selection over exactly four candidates.
         for (int x = xa; x < xb; ++x) {
           const uint8_t* px = f + static_cast<ptrdiff_t>(x) * kChannels;
-          float best = std::numeric_limits<float>::max();
-          int best_i = 0;
-          for (int i = 0; i < n; ++i) {
+          float value[kChannels];
+          for (int ch = 0; ch < kChannels; ++ch) value[ch] = px[ch];
+          float dist[4];
+          for (int i = 0; i < 4; ++i) {
             const float dx = static_cast<float>(x) - cx[i];
-            float dist = row_term[i] + spatial_weight * dx * dx;
+            dist[i] = row_term[i] + spatial_weight * dx * dx;
             for (int ch = 0; ch < kChannels; ++ch) {
-              const float dc = static_cast<float>(px[ch]) - cf[i][ch];
-              dist += dc * dc;
-            }
-            if (dist < best) {
-              best = dist;
-              best_i = i;
+              const float dc = value[ch] - cf[i][ch];
+              dist[i] += dc * dc;
             }
           }
-          out[x] = cells[best_i];
+          const bool first_pair = dist[0] <= dist[1];
+          const float best01 = first_pair ? dist[0] : dist[1];
+          const int id01 = first_pair ? cells[0] : cells[1];
+          const bool second_pair = dist[2] <= dist[3];
+          const float best23 = second_pair ? dist[2] : dist[3];
+          const int id23 = second_pair ? cells[2] : cells[3];
+          out[x] = best01 <= best23 ? id01 : id23;
         }
       }
     }
@@ -114,41 +120,57 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
   LS_CHECK(labels->type() == CV_32SC1 && labels->isContinuous());
   const int width = labels->cols, height = labels->rows;
   const int total = width * height;
-  int32_t* old_labels = labels->ptr<int32_t>();
-  std::vector<int32_t> new_labels(total, -1);
-  std::vector<int32_t> piece;
-  piece.reserve(1024);
-  int next = 0;
-  for (int start = 0; start < total; ++start) {
-    if (new_labels[start] >= 0) continue;
-    const int32_t old = old_labels[start];
-    // The neighbour that precedes the piece in raster order (left, else above) is already labelled.
-    const int sx = start % width;
-    int adjacent = -1;
-    if (sx > 0) adjacent = new_labels[start - 1];
-    if (adjacent < 0 && start >= width) adjacent = new_labels[start - width];
-    piece.clear();
-    piece.push_back(start);
-    new_labels[start] = next;
-    for (size_t i = 0; i < piece.size(); ++i) {
-      const int p = piece[i];
-      const int px = p % width;
-      const int neighbours[4] = {px > 0 ? p - 1 : -1, px + 1 < width ? p + 1 : -1,
-                                 p >= width ? p - width : -1, p + width < total ? p + width : -1};
-      for (int q : neighbours) {
-        if (q >= 0 && new_labels[q] < 0 && old_labels[q] == old) {
-          new_labels[q] = next;
-          piece.push_back(q);
-        }
-      }
+  int32_t* label = labels->ptr<int32_t>();
+  // Union-find over 4-neighbours with the same label; a root is the smallest pixel index of its
+  // piece, i.e. the piece's first pixel in raster order.
+  std::vector<int32_t> parent(total);
+  auto find = [&](int32_t p) {
+    while (parent[p] != p) {
+      parent[p] = parent[parent[p]];
+      p = parent[p];
     }
-    if (static_cast<int>(piece.size()) < min_size && adjacent >= 0) {
-      for (int p : piece) new_labels[p] = adjacent;
-    } else {
-      ++next;
+    return p;
+  };
+  auto unite = [&](int32_t a, int32_t b) {
+    a = find(a), b = find(b);
+    if (a < b) {
+      parent[b] = a;
+    } else if (b < a) {
+      parent[a] = b;
+    }
+  };
+  for (int y = 0, p = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x, ++p) {
+      parent[p] = p;
+      if (x > 0 && label[p - 1] == label[p]) unite(p - 1, p);
+      if (y > 0 && label[p - width] == label[p]) unite(p - width, p);
     }
   }
-  std::copy(new_labels.begin(), new_labels.end(), old_labels);
+  // Piece sizes, stored at the roots (then replaced there by the piece's new label).
+  std::vector<int32_t> root_info(total, 0);
+  for (int p = 0; p < total; ++p) {
+    parent[p] = find(p);
+    ++root_info[parent[p]];
+  }
+  // New labels in raster order of the pieces' first pixels. A small piece joins the piece of the
+  // pixel that precedes its first pixel (left, else above), which is already labelled.
+  int next = 0;
+  for (int y = 0, p = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x, ++p) {
+      if (parent[p] != p) {
+        label[p] = root_info[parent[p]];
+        continue;
+      }
+      int adjacent = -1;
+      if (x > 0) {
+        adjacent = label[p - 1];
+      } else if (y > 0) {
+        adjacent = label[p - width];
+      }
+      root_info[p] = root_info[p] < min_size && adjacent >= 0 ? adjacent : next++;
+      label[p] = root_info[p];
+    }
+  }
   return next;
 }
 
@@ -189,19 +211,33 @@ cv::Mat SegmentSuperpixels(const cv::Mat& image, const SuperpixelOptions& option
   }
   std::vector<float> centres(static_cast<size_t>(clusters) * stride);
   const double spatial_weight = (options.compactness / size) * (options.compactness / size);
-  std::vector<int64_t> sums(static_cast<size_t>(clusters) * (stride + 1));
+  // Sums over a fixed number of row stripes in parallel, then added in order: integers, so exact.
+  constexpr int kStripes = 4;
+  const size_t sum_size = static_cast<size_t>(clusters) * (stride + 1);
+  std::vector<int64_t> stripe_sums(sum_size * kStripes);
+  std::vector<int64_t> sums(sum_size);
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
-    std::fill(sums.begin(), sums.end(), 0);
-    for (int y = 0; y < height; ++y) {
-      const int32_t* l = labels.ptr<int32_t>(y);
-      const uint8_t* f = features.ptr<uint8_t>(y);
-      for (int x = 0; x < width; ++x) {
-        int64_t* sum = &sums[static_cast<size_t>(l[x]) * (stride + 1)];
-        sum[0] += x;
-        sum[1] += y;
-        for (int ch = 0; ch < channels; ++ch) sum[2 + ch] += f[x * channels + ch];
-        sum[stride] += 1;
+    std::fill(stripe_sums.begin(), stripe_sums.end(), 0);
+    cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+      for (int stripe = range.start; stripe < range.end; ++stripe) {
+        int64_t* stripe_sum = &stripe_sums[sum_size * stripe];
+        for (int y = height * stripe / kStripes; y < height * (stripe + 1) / kStripes; ++y) {
+          const int32_t* l = labels.ptr<int32_t>(y);
+          const uint8_t* f = features.ptr<uint8_t>(y);
+          for (int x = 0; x < width; ++x) {
+            int64_t* sum = &stripe_sum[static_cast<size_t>(l[x]) * (stride + 1)];
+            sum[0] += x;
+            sum[1] += y;
+            for (int ch = 0; ch < channels; ++ch) sum[2 + ch] += f[x * channels + ch];
+            sum[stride] += 1;
+          }
+        }
       }
+    });
+    for (size_t i = 0; i < sum_size; ++i) {
+      int64_t total = 0;
+      for (int stripe = 0; stripe < kStripes; ++stripe) total += stripe_sums[sum_size * stripe + i];
+      sums[i] = total;
     }
     for (int k = 0; k < clusters; ++k) {
       const int64_t* sum = &sums[static_cast<size_t>(k) * (stride + 1)];

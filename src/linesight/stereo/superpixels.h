@@ -17,12 +17,15 @@
 namespace linesight {
 
 struct SuperpixelOptions {
-  int region_size = 12;  // grid spacing of the seeds in px (about the superpixel side length), >= 4
-  double compactness = 14.0;  // weight of spatial distance: colour distance equivalent to one
-                              // region_size of displacement, in 8-bit Lab units (SLIC's m), > 0
-  int iterations = 2;  // rounds of centre update + reassignment, starting from the grid cells, >= 1
-  double min_size_ratio = 0.25;  // connected pieces smaller than this fraction of region_size^2 are
-                                 // merged into a neighbour, in [0, 1]
+  // px: grid spacing of the seeds (about the superpixel side length), >= 4.
+  int region_size = 12;
+  // Weight of the spatial distance (SLIC's m): the intensity difference (8-bit grey, or Lab units
+  // for colour input) that counts as much as a displacement of one region_size, > 0.
+  double compactness = 14.0;
+  // Rounds of centre update + reassignment, starting from the grid cells, >= 1.
+  int iterations = 2;
+  // Connected pieces smaller than this fraction of region_size^2 join a neighbour, in [0, 1].
+  double min_size_ratio = 0.25;
 
   void Check() const;
 };
