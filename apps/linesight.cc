@@ -21,6 +21,7 @@ constexpr Subcommand kSubcommands[] = {
     {"rectify", linesight::cli::RunRectify, "rectify a raw stereo pair with a calibration (Bouguet)"},
     {"cloud", linesight::cli::RunCloud, "point cloud (PLY, metres) and depth PNG from a disparity map"},
     {"range", linesight::cli::RunRange, "distance +- sigma to obstacles in ROIs or found automatically"},
+    {"bench", linesight::cli::RunBench, "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -234,14 +234,13 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   s.fixed.create(h, w, CV_16SC1);
 
   const int subpixel = static_cast<int>(o.subpixel);
-  auto finish_row = [&](int y) {
+  auto finish_row = [&](int y, const uint16_t* sum_row) {
     std::vector<uint16_t> right_scratch(detail::WtaScratchSize(w, num));
     detail::WtaRow row;
     row.best = s.best.ptr<int16_t>(y);
     row.best_cost = result.min_cost.ptr<uint16_t>(y);
     row.second_cost = s.second_cost.ptr<uint16_t>(y);
     row.right_best = s.right_best.ptr<int16_t>(y);
-    const uint16_t* sum_row = s.sum.Row(y);
     detail::WinnerTakesAllRow(sum_row, w, num, dmin, row, right_scratch.data());
     float* raw = result.raw_disparity.ptr<float>(y);
     float* right_out = result.right_disparity.ptr<float>(y);

@@ -69,8 +69,8 @@ void BM_AggregatePaths(benchmark::State& state) {
   detail::SumVolume sum;
   detail::SweepScratch forward, backward;
   for (auto _ : state) {
-    detail::AggregatePaths(f.input, static_cast<int>(state.range(4)), &sum, &forward, &backward, nullptr);
-    benchmark::DoNotOptimize(sum.data.data());
+    detail::AggregatePaths(f.input, static_cast<int>(state.range(4)), &sum, &forward, &backward,
+                           [](int, const uint16_t* row) { benchmark::DoNotOptimize(row); });
   }
   SetItems(state);
 }
@@ -85,14 +85,18 @@ void BM_WinnerTakesAll(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0)), h = static_cast<int>(state.range(1));
   const int num = static_cast<int>(state.range(2));
   Fixture f(w, h, num);
-  detail::SumVolume sum;
+  detail::SumVolume partial;
   detail::SweepScratch forward, backward;
-  detail::AggregatePaths(f.input, 2, &sum, &forward, &backward, nullptr);
+  detail::AlignedVector<uint16_t> sum(static_cast<size_t>(w) * h * detail::PaddedDisparities(num));
+  const size_t row_lanes = static_cast<size_t>(w) * detail::PaddedDisparities(num);
+  detail::AggregatePaths(f.input, 2, &partial, &forward, &backward, [&](int y, const uint16_t* row) {
+    std::copy(row, row + row_lanes, sum.begin() + static_cast<ptrdiff_t>(y * row_lanes));
+  });
   std::vector<int16_t> best(w), right_best(w);
   std::vector<uint16_t> best_cost(w), second(w), scratch(detail::WtaScratchSize(w, num));
   for (auto _ : state) {
     for (int y = 0; y < h; ++y) {
-      detail::WinnerTakesAllRow(sum.Row(y), w, num, 0,
+      detail::WinnerTakesAllRow(sum.data() + y * row_lanes, w, num, 0,
                                 {best.data(), best_cost.data(), second.data(), right_best.data()}, scratch.data());
     }
     benchmark::DoNotOptimize(best.data());
@@ -111,6 +115,25 @@ void BM_SgmEndToEnd(benchmark::State& state) {
   SetItems(state);
 }
 BENCHMARK(BM_SgmEndToEnd)->Args({752, 480, 128})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace linesight
+
+namespace linesight {
+namespace {
+
+// OpenCV baselines at the same size, for orientation (the official comparison is `linesight bench`).
+void BM_OpenCvSgbm(benchmark::State& state) {
+  const int w = static_cast<int>(state.range(0)), h = static_cast<int>(state.range(1));
+  Fixture f(w, h, 1);
+  MatcherOptions options;
+  options.num_disparities = static_cast<int>(state.range(2));
+  options.params["mode"] = state.range(3) == 0 ? "3way" : "hh";
+  auto matcher = CreateMatcher("sgbm", options);
+  for (auto _ : state) benchmark::DoNotOptimize(matcher->Compute(f.left, f.right).data);
+  SetItems(state);
+}
+BENCHMARK(BM_OpenCvSgbm)->Args({752, 480, 128, 0})->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace linesight

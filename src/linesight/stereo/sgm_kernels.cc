@@ -12,6 +12,7 @@
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "linesight/stereo/sgm_kernels.cc"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
 HWY_BEFORE_NAMESPACE();
@@ -181,7 +182,7 @@ void MatchingCostRowImpl(const CostInput& in, int y, uint16_t* out) {
 // ------------------------------------------------------------------------------------------ aggregation
 // Path buffers of one sweep: for each of the three paths that come from the previous row (vertical, diagonal,
 // anti-diagonal) two rows (by parity of the sweep step) of `width` slots, plus two slots of the horizontal
-// path; each slot holds kSgmLaneAlign guard lanes, `padded` lanes, kSgmLaneAlign guard lanes.
+// path.
 struct SweepLayout {
   int width = 0;
   int padded = 0;
@@ -190,91 +191,100 @@ struct SweepLayout {
     return (static_cast<size_t>(path) * 2 + parity) * width * slot;
   }
   size_t Horizontal(int parity) const { return 6 * static_cast<size_t>(width) * slot + parity * slot; }
+  // Slot s occupies [s * slot, (s + 1) * slot): kSgmLaneAlign guard lanes, then `padded` data lanes; the guard
+  // of the next slot (or the trailing guard) follows the data.
   size_t Minima(int path, int parity) const {  // into the minima area after the slots
     return (static_cast<size_t>(path) * 2 + parity) * width;
   }
-  size_t TotalLanes() const { return 6 * static_cast<size_t>(width) * slot + 2 * slot; }
+  size_t TotalLanes() const { return 6 * static_cast<size_t>(width) * slot + 2 * slot + kSgmLaneAlign; }
 };
 
 SweepLayout MakeLayout(int width, int num_disparities) {
   SweepLayout layout;
   layout.width = width;
   layout.padded = PaddedDisparities(num_disparities);
-  layout.slot = static_cast<size_t>(layout.padded) + 2 * kSgmLaneAlign;
+  layout.slot = static_cast<size_t>(layout.padded) + kSgmLaneAlign;
   return layout;
 }
 
+// Previous-pixel state of one path for the current pixel. A path that starts at this pixel reads an all-zero
+// slot with prev_min 0, for which the recurrence reduces to L = C.
 struct PathStep {
-  const uint16_t* prev = nullptr;  // previous L of this path (data lanes), nullptr at the start of the path
+  const uint16_t* prev = nullptr;  // data lanes of the predecessor's L
   uint16_t prev_min = 0;
   uint16_t p2 = 0;
   uint16_t* cur = nullptr;
   uint16_t* cur_min = nullptr;
 };
 
-// One pixel: computes L for `num` paths from the pixel's costs, stores them and their minima, and stores or
-// adds their sum into `sum`.
-HWY_INLINE void AggregatePixel(const uint16_t* HWY_RESTRICT cost, PathStep* steps, int num, int padded,
-                               int num_disparities, uint16_t p1, bool add, uint16_t* HWY_RESTRICT sum) {
+// One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and stores or
+// adds their sum to the other sweep's partial sum in `sum`, writing the final S into `total`. Chunks at or beyond num_disparities get the sentinel in the padding lanes.
+template <int kPaths, bool kAdd>
+HWY_INLINE void AggregatePixel(const uint16_t* HWY_RESTRICT cost, const PathStep* steps, int full_chunks_end,
+                               int padded, size_t tail_valid_first, uint16_t p1,
+                               uint16_t* HWY_RESTRICT sum, uint16_t* HWY_RESTRICT total) {
   const hn::ScalableTag<uint16_t> d;
-  const size_t n = hn::Lanes(d);
-  const auto p1v = hn::Set(d, p1);
-  const auto sentinel = hn::Set(d, kSgmPathSentinel);
-  auto minima0 = sentinel, minima1 = sentinel, minima2 = sentinel, minima3 = sentinel;
-  for (int k = 0; k < padded; k += static_cast<int>(n)) {
-    const auto c = hn::LoadU(d, cost + k);
-    const bool partial = k + static_cast<int>(n) > num_disparities;
-    const auto valid = hn::FirstN(d, num_disparities > k ? static_cast<size_t>(num_disparities - k) : 0);
-    auto acc = hn::Zero(d);
-    for (int p = 0; p < num; ++p) {
-      const PathStep& s = steps[p];
-      auto l = c;
-      if (s.prev != nullptr) {
-        const auto same = hn::LoadU(d, s.prev + k);
-        const auto below = hn::LoadU(d, s.prev + k - 1);
-        const auto above = hn::LoadU(d, s.prev + k + 1);
-        const auto prev_min = hn::Set(d, s.prev_min);
-        auto best = hn::Min(same, hn::SaturatedAdd(hn::Min(below, above), p1v));
-        best = hn::Min(best, hn::Set(d, static_cast<uint16_t>(s.prev_min + s.p2)));
-        l = hn::Add(c, hn::Sub(best, prev_min));
-      }
-      if (partial) l = hn::IfThenElse(valid, l, sentinel);
-      hn::StoreU(l, d, s.cur + k);
-      acc = hn::SaturatedAdd(acc, l);
-      switch (p) {
-        case 0: minima0 = hn::Min(minima0, l); break;
-        case 1: minima1 = hn::Min(minima1, l); break;
-        case 2: minima2 = hn::Min(minima2, l); break;
-        default: minima3 = hn::Min(minima3, l); break;
-      }
-    }
-    if (add) acc = hn::SaturatedAdd(acc, hn::LoadU(d, sum + k));
-    hn::StoreU(acc, d, sum + k);
+  using V = hn::Vec<decltype(d)>;
+  const int n = static_cast<int>(hn::Lanes(d));
+  const V p1v = hn::Set(d, p1);
+  const V sentinel = hn::Set(d, kSgmPathSentinel);
+  const uint16_t* prev[kPaths];
+  uint16_t* cur[kPaths];
+  V prev_min[kPaths], jump[kPaths], minima[kPaths];
+  for (int p = 0; p < kPaths; ++p) {
+    prev[p] = steps[p].prev;
+    cur[p] = steps[p].cur;
+    prev_min[p] = hn::Set(d, steps[p].prev_min);
+    jump[p] = hn::Set(d, static_cast<uint16_t>(steps[p].prev_min + steps[p].p2));
+    minima[p] = sentinel;
   }
-  const decltype(minima0) minima[4] = {minima0, minima1, minima2, minima3};
-  for (int p = 0; p < num; ++p) *steps[p].cur_min = hn::GetLane(hn::MinOfLanes(d, minima[p]));
+  auto chunk = [&](int k, bool partial, size_t valid_lanes) HWY_ATTR {
+    const V c = hn::LoadU(d, cost + k);
+    V acc;
+    for (int p = 0; p < kPaths; ++p) {
+      const V same = hn::LoadU(d, prev[p] + k);
+      const V below = hn::LoadU(d, prev[p] + k - 1);
+      const V above = hn::LoadU(d, prev[p] + k + 1);
+      V best = hn::Min(same, hn::SaturatedAdd(hn::Min(below, above), p1v));
+      best = hn::Min(best, jump[p]);
+      V l = hn::Add(c, hn::Sub(best, prev_min[p]));
+      if (partial) l = hn::IfThenElse(hn::FirstN(d, valid_lanes), l, sentinel);
+      hn::StoreU(l, d, cur[p] + k);
+      minima[p] = hn::Min(minima[p], l);
+      acc = p == 0 ? l : hn::SaturatedAdd(acc, l);
+    }
+    if (kAdd) {
+      hn::StoreU(hn::SaturatedAdd(acc, hn::Load(d, sum + k)), d, total + k);
+    } else {
+      hn::Stream(acc, d, sum + k);  // written once, read by the other sweep much later: bypass the caches
+    }
+  };
+  int k = 0;
+  for (; k < full_chunks_end; k += n) chunk(k, false, 0);
+  for (; k < padded; k += n) {
+    chunk(k, true, k == full_chunks_end ? tail_valid_first : 0);
+  }
+  for (int p = 0; p < kPaths; ++p) *steps[p].cur_min = hn::GetLane(hn::MinOfLanes(d, minima[p]));
 }
 
 // Sweep steps [step_begin, step_end): step t is row t (forward) or row height-1-t (backward). Forward paths come
 // from the left, top, top-left and top-right; backward paths from the right, bottom, bottom-right, bottom-left.
-void SweepImpl(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
-               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch,
-               const std::function<void(int)>* row_done) {
+template <int kPaths, bool kAdd>
+void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end,
+                const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
   const CostInput& cin = in.cost;
   const int w = cin.width, h = cin.height;
   const SweepLayout layout = MakeLayout(w, cin.num_disparities);
   const int padded = layout.padded;
-  const size_t minima_lanes = 6 * static_cast<size_t>(w);
-  const size_t total = layout.TotalLanes() + minima_lanes + 2 + padded;
-  if (step_begin == 0 || scratch->buffers.size() != total) {
-    scratch->buffers.assign(total, kSgmPathSentinel);
-  }
+  const int n = static_cast<int>(hn::Lanes(hn::ScalableTag<uint16_t>()));
+  const int full_chunks_end = cin.num_disparities / n * n;
+  const size_t tail_valid_first = static_cast<size_t>(cin.num_disparities - full_chunks_end);
   uint16_t* base = scratch->buffers.data();
   uint16_t* minima = base + layout.TotalLanes();
-  uint16_t* horizontal_min = minima + minima_lanes;  // 2 entries
-  uint16_t* cost = horizontal_min + 2;               // padded lanes
+  uint16_t* horizontal_min = minima + 6 * static_cast<size_t>(w);  // 2 entries
+  uint16_t* cost = horizontal_min + 2 + (kSgmLaneAlign - 2);        // padded lanes
+  const uint16_t* zero_slot = cost + padded + kSgmLaneAlign;        // padded zero lanes after a guard
   const int guard = kSgmLaneAlign;
-  const bool diagonals = in.num_paths == 8;
   const uint16_t p1 = static_cast<uint16_t>(in.p1);
   CostRowContext ctx;
   for (int t = step_begin; t < step_end; ++t) {
@@ -285,14 +295,18 @@ void SweepImpl(const AggregationInput& in, int direction, int step_begin, int st
     const uint8_t* gray = cin.gray_left + static_cast<size_t>(y) * w;
     const uint8_t* gray_prev = t > 0 ? cin.gray_left + static_cast<size_t>(prev_y) * w : nullptr;
     uint16_t* sum_row = sum->Row(y);
+    uint16_t* total_row = scratch->total_row.data();
     for (int i = 0; i < w; ++i) {
       const int x = direction > 0 ? i : w - 1 - i;
+      if (kAdd && i + 4 < w) {
+        const uint16_t* ahead = sum_row + static_cast<size_t>(x + 4 * direction) * padded;
+        for (int line = 0; line < padded; line += 32) hwy::Prefetch(ahead + line);
+      }
       PixelCost(ctx, x, cost);
-      PathStep steps[4];
-      int num = 0;
+      PathStep steps[kPaths];
       // Horizontal path from x - direction.
       {
-        PathStep& s = steps[num++];
+        PathStep& s = steps[0];
         const int hp = i & 1;
         s.cur = base + layout.Horizontal(hp) + guard;
         s.cur_min = &horizontal_min[hp];
@@ -300,13 +314,14 @@ void SweepImpl(const AggregationInput& in, int direction, int step_begin, int st
           s.prev = base + layout.Horizontal(1 - hp) + guard;
           s.prev_min = horizontal_min[1 - hp];
           s.p2 = p2_table[std::abs(gray[x] - gray[x - direction])];
+        } else {
+          s.prev = zero_slot;
         }
       }
       // Paths from the previous row: vertical (dx = 0), diagonal (dx = -direction), anti-diagonal (+direction).
-      const int num_row_paths = diagonals ? 3 : 1;
-      for (int p = 0; p < num_row_paths; ++p) {
+      for (int p = 0; p + 1 < kPaths; ++p) {
         const int dx = p == 0 ? 0 : (p == 1 ? -direction : direction);
-        PathStep& s = steps[num++];
+        PathStep& s = steps[p + 1];
         s.cur = base + layout.RowBuffer(p, cur_parity) + static_cast<size_t>(x) * layout.slot + guard;
         s.cur_min = minima + layout.Minima(p, cur_parity) + x;
         const int px = x + dx;
@@ -314,12 +329,43 @@ void SweepImpl(const AggregationInput& in, int direction, int step_begin, int st
           s.prev = base + layout.RowBuffer(p, prev_parity) + static_cast<size_t>(px) * layout.slot + guard;
           s.prev_min = minima[layout.Minima(p, prev_parity) + px];
           s.p2 = p2_table[std::abs(gray[x] - gray_prev[px])];
+        } else {
+          s.prev = zero_slot;
         }
       }
-      AggregatePixel(cost, steps, num, padded, cin.num_disparities, p1, add,
-                     sum_row + static_cast<size_t>(x) * padded);
+      AggregatePixel<kPaths, kAdd>(cost, steps, full_chunks_end, padded, tail_valid_first, p1,
+                                   sum_row + static_cast<size_t>(x) * padded,
+                                   total_row + static_cast<size_t>(x) * padded);
     }
-    if (row_done != nullptr && *row_done) (*row_done)(y);
+    if (kAdd && row_done != nullptr && *row_done) (*row_done)(y, total_row);
+  }
+  if (!kAdd) hwy::FlushStream();
+}
+
+void SweepImpl(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
+               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
+  const SweepLayout layout = MakeLayout(in.cost.width, in.cost.num_disparities);
+  scratch->total_row.resize(static_cast<size_t>(in.cost.width) * layout.padded);
+  // Slots, minima, horizontal minima (padded to a vector), the pixel's costs, a guard and the zero slot.
+  const size_t total = layout.TotalLanes() + 6 * static_cast<size_t>(in.cost.width) + kSgmLaneAlign +
+                       layout.padded + kSgmLaneAlign + layout.padded + kSgmLaneAlign;
+  if (step_begin == 0 || scratch->buffers.size() != total) {
+    scratch->buffers.assign(total, kSgmPathSentinel);
+    uint16_t* zero = scratch->buffers.data() + total - kSgmLaneAlign - layout.padded;
+    std::fill(zero, zero + layout.padded, uint16_t{0});
+  }
+  if (in.num_paths == 8) {
+    if (add) {
+      SweepSteps<4, true>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+    } else {
+      SweepSteps<4, false>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+    }
+  } else {
+    if (add) {
+      SweepSteps<2, true>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+    } else {
+      SweepSteps<2, false>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+    }
   }
 }
 
@@ -456,7 +502,7 @@ void SumVolume::Resize(int w, int h, int d) {
 }
 
 void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, SweepScratch* forward,
-                    SweepScratch* backward, const std::function<void(int)>& row_done) {
+                    SweepScratch* backward, const RowDone& row_done) {
   LS_CHECK(input.num_paths == 4 || input.num_paths == 8);
   LS_CHECK(MaxMatchingCost(input.cost) + input.p2 <= kSgmMaxPathCost);
   const int h = input.cost.height;
@@ -470,7 +516,7 @@ void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, 
     p2_table[g] = static_cast<uint16_t>(p2);
   }
   const auto sweep = HWY_DYNAMIC_DISPATCH(SweepImpl);
-  const std::function<void(int)>* done = row_done ? &row_done : nullptr;
+  const RowDone* done = row_done ? &row_done : nullptr;
   if (threads <= 1 || h < 2) {
     sweep(input, +1, 0, h, false, p2_table, sum, forward, nullptr);
     sweep(input, -1, 0, h, true, p2_table, sum, backward, done);

@@ -369,25 +369,33 @@ TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
     in.p2 = o.p2;
     in.p2_gradient_alpha = o.p2_gradient_alpha;
     for (int threads : {1, 2}) {
-      detail::SumVolume sum;
+      detail::SumVolume partial;
       detail::SweepScratch forward, backward;
-      detail::AggregatePaths(in, threads, &sum, &forward, &backward, nullptr);
       const int num = c.num_disparities;
+      const int padded = detail::PaddedDisparities(num);
+      std::vector<uint16_t> sum(static_cast<size_t>(c.width) * c.height * padded);
+      std::vector<int> calls(c.height, 0);
+      detail::AggregatePaths(in, threads, &partial, &forward, &backward, [&](int y, const uint16_t* row) {
+        std::copy(row, row + static_cast<size_t>(c.width) * padded, sum.begin() + static_cast<size_t>(y) * c.width * padded);
+        ++calls[y];
+      });
+      ASSERT_EQ(calls, std::vector<int>(c.height, 1));
+      auto sum_row = [&](int y) { return sum.data() + static_cast<size_t>(y) * c.width * padded; };
       for (int y = 0; y < c.height; ++y) {
         for (int x = 0; x < c.width; ++x) {
-          const uint16_t* s = sum.Row(y) + static_cast<size_t>(x) * sum.padded;
+          const uint16_t* s = sum_row(y) + static_cast<size_t>(x) * padded;
           for (int k = 0; k < num; ++k) {
             ASSERT_EQ(s[k], r.sum[(static_cast<size_t>(y) * c.width + x) * num + k])
                 << Describe(c) << " threads=" << threads << " at x=" << x << " y=" << y << " k=" << k;
           }
-          for (int k = num; k < sum.padded; ++k) ASSERT_EQ(s[k], 0xFFFF);
+          for (int k = num; k < padded; ++k) ASSERT_EQ(s[k], 0xFFFF);
         }
       }
       std::vector<int16_t> best(c.width), right_best(c.width);
       std::vector<uint16_t> best_cost(c.width), second(c.width);
       std::vector<uint16_t> scratch(detail::WtaScratchSize(c.width, num));
       for (int y = 0; y < c.height; ++y) {
-        detail::WinnerTakesAllRow(sum.Row(y), c.width, num, c.min_disparity,
+        detail::WinnerTakesAllRow(sum_row(y), c.width, num, c.min_disparity,
                                   {best.data(), best_cost.data(), second.data(), right_best.data()},
                                   scratch.data());
         for (int x = 0; x < c.width; ++x) {

@@ -90,8 +90,8 @@ struct AggregationInput {
   int p2_gradient_alpha = 0;
 };
 
-// Sum volume S: height rows of width pixels of PaddedDisparities() uint16 lanes; after AggregatePaths lanes
-// k >= num_disparities hold 0xFFFF (saturated sums of sentinels).
+// Partial sums of the sweep that reaches a row first: height rows of width pixels of PaddedDisparities()
+// uint16 lanes (the only full-size buffer of the matcher).
 struct SumVolume {
   int width = 0;
   int height = 0;
@@ -109,14 +109,20 @@ struct SweepScratch {
   AlignedVector<uint64_t> census_reversed;
   AlignedVector<uint16_t> bt_reversed;
   AlignedVector<uint16_t> bt_left;
+  AlignedVector<uint16_t> total_row;  // final S of the row being finished
 };
 
-// Runs the forward sweep (paths from the left / top) and the backward sweep (from the right / bottom) and
-// leaves S in `sum`. With threads >= 2 the two sweeps run concurrently: each first writes its half of the rows,
-// then, after a barrier, adds into the other half; integer sums make the result independent of the schedule.
-// `row_done(y)` is called once per row as soon as S of that row is final (from the thread that finished it).
+// Receives the final S of row y: width pixels of PaddedDisparities() lanes; lanes k >= num_disparities hold
+// 0xFFFF (saturated sums of sentinels). The pointer is valid during the call only.
+using RowDone = std::function<void(int y, const uint16_t* sum_row)>;
+
+// Runs the forward sweep (paths from the left / top) and the backward sweep (from the right / bottom). The
+// sweep that reaches a row first streams its 4-path (or 2-path) sum into `sum`; the second adds its own and
+// hands the final row to `row_done(y, S row)` (called once per row, from the thread that finished it). With
+// threads >= 2 the sweeps run concurrently: each first writes its half of the rows, then, after a barrier,
+// finishes the other half; integer sums make the result independent of the schedule.
 void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, SweepScratch* forward,
-                    SweepScratch* backward, const std::function<void(int)>& row_done);
+                    SweepScratch* backward, const RowDone& row_done);
 
 // ---------------------------------------------------------------------------------------------------------
 // Winner-takes-all of one row of S.

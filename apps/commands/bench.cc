@@ -1,0 +1,59 @@
+// linesight bench: end-to-end throughput of sgm / isgm against OpenCV StereoSGBM in the same run.
+#include <cstdio>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "linesight/core/error.h"
+#include "linesight/io/image_io.h"
+#include "linesight/io/json_io.h"
+#include "linesight/stereo/throughput_bench.h"
+
+namespace linesight::cli {
+
+int RunBench(int argc, char** argv) {
+  CLI::App app{"Throughput (ms, fps, MDE/s, peak memory) of dense matchers on the same images in one run: "
+               "sgm, isgm and OpenCV StereoSGBM (sgbm-3way = MODE_SGBM_3WAY, sgbm-hh = MODE_HH).",
+               "bench"};
+  BenchOptions options;
+  std::vector<std::string> sizes = {"752x480x128", "752x480x192", "1242x375x128"};
+  std::string left_path, right_path, json_path;
+  app.add_option("--sizes", sizes, "WIDTHxHEIGHTxDISPARITIES list (comma-separated)")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--methods", options.methods,
+                 "matcher names (any of the factory's, plus sgbm-3way and sgbm-hh); unknown ones are skipped")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--runs", options.runs, "timed runs per method and size (median reported)")->capture_default_str();
+  app.add_option("--warmup", options.warmup, "untimed warm-up runs (discarded)")->capture_default_str();
+  app.add_option("--threads", options.threads, "worker threads for every method (0 = all cores)")
+      ->capture_default_str();
+  app.add_option("--left", left_path, "left image to resize to each size (default: synthetic textured pair)");
+  app.add_option("--right", right_path, "right image (with --left)");
+  app.add_option("--json", json_path, "machine-readable report (- for stdout)");
+  return RunCommand(app, argc, argv, [&] {
+    options.sizes.clear();
+    for (const std::string& s : sizes) options.sizes.push_back(ParseBenchSize(s));
+    if (left_path.empty() != right_path.empty()) throw UsageError("--left and --right go together");
+    if (!left_path.empty()) {
+      options.left = ReadImage(left_path, ImageColor::kGray);
+      options.right = ReadImage(right_path, ImageColor::kGray);
+      if (options.left.size() != options.right.size()) {
+        throw InputError(fmt::format("{} is {}x{} but {} is {}x{}", left_path, options.left.cols,
+                                     options.left.rows, right_path, options.right.cols, options.right.rows));
+      }
+    }
+    const BenchReport report = RunThroughputBench(options, [](const BenchRow& row) {
+      std::fprintf(stderr, "bench: %s %dx%dx%d %s\n", row.method.c_str(), row.size.width, row.size.height,
+                   row.size.num_disparities,
+                   row.skipped ? ("skipped: " + row.note).c_str() : fmt::format("{:.1f} ms", row.median_ms).c_str());
+    });
+    if (json_path != "-") std::fputs(BenchMarkdown(report).c_str(), stdout);
+    if (!json_path.empty()) WriteJson(json_path, BenchJson(report));
+  });
+}
+
+}  // namespace linesight::cli
