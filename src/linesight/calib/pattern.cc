@@ -123,6 +123,13 @@ PatternSpec ParsePatternSpec(const std::string& text) {
   return spec;
 }
 
+int ArucoDictionaryId(const std::string& name) {
+  const auto it = DictionaryNames().find(name);
+  if (it == DictionaryNames().end())
+    throw UsageError(fmt::format("unknown ArUco dictionary '{}'", name));
+  return it->second;
+}
+
 BoardGeometry MakeBoardGeometry(const PatternSpec& spec) {
   BoardGeometry board;
   board.spacing_m = spec.square_m;
@@ -227,6 +234,11 @@ Detection DetectPattern(const cv::Mat& gray, const PatternSpec& spec,
                                        options.min_charuco_corners);
         return detection;
       }
+      // Refine with the same sub-pixel step as the classic chessboard detector: OpenCV 4.6's
+      // interpolated ChArUco corners sit +0.5 px off in x and y on a rendered board (pixel-corner
+      // convention); after this step they match the chessboard detectors (pixel-centre convention),
+      // see pattern_test.cc.
+      cv::cornerSubPix(gray, corners, subpix_window, cv::Size(-1, -1), subpix_criteria);
       detection.ids = ids;
       for (const cv::Point2f& p : corners) detection.pixels.emplace_back(p.x, p.y);
       detection.found = true;

@@ -54,6 +54,9 @@ struct BoardGeometry {
 };
 BoardGeometry MakeBoardGeometry(const PatternSpec& spec);
 
+// cv::aruco predefined dictionary id of a dictionary name ("4x4_50", ...); throws UsageError.
+int ArucoDictionaryId(const std::string& name);
+
 struct DetectionOptions {
   // Chessboards: true = cv::findChessboardCornersSB (sector-based, sub-pixel accurate by
   // construction); false = cv::findChessboardCorners + cv::cornerSubPix.
