@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -199,7 +200,7 @@ cv::Mat ColorizeDisparityWithLegend(const cv::Mat& disparity, float min_d, float
   const double span = max_d - min_d;
   const int max_labels = std::max(2, (bar_right - bar_left) / (text_size.width / 2 + margin));
   const double step = NiceStep(span, std::min(8, max_labels));
-  int last_label_right = -1;
+  int last_label_right = std::numeric_limits<int>::min() / 2;  // no label yet
   const int text_y = bar_top + bar_height + tick_height + margin + text_size.height;
   const double first_tick = std::ceil(min_d / step - 1e-9);
   for (int k = 0; k <= 20; ++k) {
