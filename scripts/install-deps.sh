@@ -9,6 +9,7 @@ PACKAGES=(
   libeigen3-dev libceres-dev libboost-graph-dev libhwy-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev  # libFuzzer targets (cmake -DLINESIGHT_FUZZ=ON, see src/linesight/io)
   python3-numpy python3-opencv
 )
 
