@@ -726,6 +726,22 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
                     7.0, 1.8, crossarm_y - 4.0, 4.0, &parts.fixed);
     AddLatticeTower({middle_x + 28.0, options.ground_depth_m, 1.35 * span + 25.0}, height + 4.0,
                     7.0, 1.8, crossarm_y - 4.0, 4.0, &parts.fixed);
+    // Its conductors, sagging between the two crossarms (plain cables: far away, no strand detail).
+    const double z0 = 0.35 * span + 25.0, z1 = 1.35 * span + 25.0,
+                 attach_y = crossarm_y - 4.0 + 1.5;
+    for (double dx : {-3.5, 3.5}) {
+      const double a = 600.0, middle = 0.5 * (z0 + z1);
+      auto point = [&](double z) {
+        return Vec3{middle_x + 28.0 + dx,
+                    attach_y + a * (std::cosh((z0 - middle) / a) - std::cosh((z - middle) / a)), z};
+      };
+      constexpr int kSegments = 40;
+      for (int k = 0; k < kSegments; ++k) {
+        const double za = z0 + (z1 - z0) * k / kSegments, zb = z0 + (z1 - z0) * (k + 1) / kSegments;
+        parts.fixed.push_back(Tagged(MakeCapsule(point(za), point(zb), 0.015),
+                                     Material::kTowerSteel, kClassConductor, 0, 3.0));
+      }
+    }
   }
 
   // Place obstacles nearest first: a farther obstacle can never hide a nearer one's nearest pixel.
