@@ -830,7 +830,13 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
 
 }  // namespace detail
 
-PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
+struct PowerLineSceneRenderer::Linear {
+  cv::Mat left, right, rectified_left, rectified_right;  // CV_32FC3 radiance
+  CameraIntrinsics rectified;
+};
+
+PowerLineSceneRenderer::PowerLineSceneRenderer(const PowerLineSceneOptions& options)
+    : options_(options), linear_(std::make_shared<Linear>()) {
   const detail::PowerLineSceneModel model = detail::BuildPowerLineSceneModel(options);
   const detail::RenderScene& scene = model.scene;
   const detail::RigPoses& poses = model.poses;
@@ -872,30 +878,49 @@ PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
     result.obstacles.push_back(o);
   }
 
-  // Raw images through the distorted cameras.
-  const SensorOptions& sensor = options.sensor;
-  const std::uint64_t noise_seed =
-      sensor.noise_seed.value_or(detail::Mix64(options.seed ^ 0xa5a5a5a5ULL));
-  const cv::Mat left_linear =
-      detail::RenderLinearImage(scene, options.rig.left, poses.left, size, sensor.supersampling);
-  const cv::Mat right_linear =
-      detail::RenderLinearImage(scene, options.rig.right, poses.right, size, sensor.supersampling);
-  result.left = detail::EncodeSensorImage(left_linear, sensor, 1.0, options.rig.left.cx,
-                                          options.rig.left.cy, detail::Mix64(noise_seed * 2 + 1));
-  result.right =
-      detail::EncodeSensorImage(right_linear, sensor, sensor.right_gain, options.rig.right.cx,
-                                options.rig.right.cy, detail::Mix64(noise_seed * 2 + 2));
+  // Radiance through the distorted raw cameras (and the ideal rectified ones); the sensor model is
+  // applied per capture.
+  const int supersampling = options.sensor.supersampling;
+  linear_->left =
+      detail::RenderLinearImage(scene, options.rig.left, poses.left, size, supersampling);
+  linear_->right =
+      detail::RenderLinearImage(scene, options.rig.right, poses.right, size, supersampling);
+  linear_->rectified = rect_k;
   if (options.render_rectified_pair) {
-    const cv::Mat rl =
-        detail::RenderLinearImage(scene, rect_k, poses.rectified_left, size, sensor.supersampling);
-    const cv::Mat rr =
-        detail::RenderLinearImage(scene, rect_k, poses.rectified_right, size, sensor.supersampling);
-    result.rectified_left = detail::EncodeSensorImage(rl, sensor, 1.0, rect_k.cx, rect_k.cy,
-                                                      detail::Mix64(noise_seed * 2 + 3));
-    result.rectified_right = detail::EncodeSensorImage(
-        rr, sensor, sensor.right_gain, rect_k.cx, rect_k.cy, detail::Mix64(noise_seed * 2 + 4));
+    linear_->rectified_left =
+        detail::RenderLinearImage(scene, rect_k, poses.rectified_left, size, supersampling);
+    linear_->rectified_right =
+        detail::RenderLinearImage(scene, rect_k, poses.rectified_right, size, supersampling);
+  }
+  ground_truth_ = std::move(result);
+}
+
+std::uint64_t PowerLineSceneRenderer::DefaultNoiseSeed() const {
+  return options_.sensor.noise_seed.value_or(detail::Mix64(options_.seed ^ 0xa5a5a5a5ULL));
+}
+
+PowerLineScene PowerLineSceneRenderer::Capture(std::uint64_t noise_seed) const {
+  PowerLineScene result = ground_truth_;
+  const SensorOptions& sensor = options_.sensor;
+  const StereoRigOptions& rig = options_.rig;
+  result.left = detail::EncodeSensorImage(linear_->left, sensor, 1.0, rig.left.cx, rig.left.cy,
+                                          detail::Mix64(noise_seed * 2 + 1));
+  result.right = detail::EncodeSensorImage(linear_->right, sensor, sensor.right_gain, rig.right.cx,
+                                           rig.right.cy, detail::Mix64(noise_seed * 2 + 2));
+  if (options_.render_rectified_pair) {
+    const CameraIntrinsics& k = linear_->rectified;
+    result.rectified_left = detail::EncodeSensorImage(linear_->rectified_left, sensor, 1.0, k.cx,
+                                                      k.cy, detail::Mix64(noise_seed * 2 + 3));
+    result.rectified_right =
+        detail::EncodeSensorImage(linear_->rectified_right, sensor, sensor.right_gain, k.cx, k.cy,
+                                  detail::Mix64(noise_seed * 2 + 4));
   }
   return result;
+}
+
+PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options) {
+  const PowerLineSceneRenderer renderer(options);
+  return renderer.Capture(renderer.DefaultNoiseSeed());
 }
 
 nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles) {

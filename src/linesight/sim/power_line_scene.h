@@ -44,6 +44,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -239,6 +240,25 @@ struct PowerLineScene {
 // Renders the scene. Throws OptionError for invalid options, InputError when an obstacle cannot be
 // placed at its distance (not visible in the rectified left image there, or beyond the span).
 PowerLineScene RenderPowerLineScene(const PowerLineSceneOptions& options);
+
+// Renders once, captures many times: the constructor places the obstacles, traces the ground truth
+// and the scene radiance (the expensive part); Capture() applies the sensor model (exposure, gain,
+// vignetting, blur, noise) with a given noise seed, which takes a few milliseconds. Use it for
+// repeated measurements with fresh noise on the same scene. Capture(DefaultNoiseSeed()) equals
+// RenderPowerLineScene(options) byte for byte. Same exceptions as RenderPowerLineScene.
+class PowerLineSceneRenderer {
+ public:
+  explicit PowerLineSceneRenderer(const PowerLineSceneOptions& options);
+  PowerLineScene Capture(std::uint64_t noise_seed) const;
+  // options.sensor.noise_seed if set, else derived from options.seed.
+  std::uint64_t DefaultNoiseSeed() const;
+
+ private:
+  struct Linear;
+  PowerLineSceneOptions options_;
+  PowerLineScene ground_truth_;     // everything but the images
+  std::shared_ptr<Linear> linear_;  // radiance images, shared by copies
+};
 
 // Obstacles as JSON: {"distance_definition": "<the definition above>", "obstacles": [{"id", "type",
 // "conductor", "requested_distance_m", "distance_m", "surface_min_depth_m", "nearest_pixel": [u,

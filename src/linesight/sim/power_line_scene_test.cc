@@ -345,6 +345,25 @@ TEST(RenderPowerLineScene, DeterministicInTheSeedsAndNoiseOnlyInTheNoiseSeed) {
   EXPECT_GT(cv::norm(quiet2.left, d.left, cv::NORM_L1), 0.0);
 }
 
+TEST(PowerLineSceneRenderer, CapturesEqualFreshRendersWithThatNoiseSeed) {
+  PowerLineSceneOptions o = SmallScene();
+  o.obstacles = {{ObstacleType::kDamper, 2.0, 0}};
+  o.sensor.supersampling = 1;
+  o.sensor.blur_sigma_px = 0.7;
+  o.sensor.shot_noise_electrons = 5000;
+  const PowerLineSceneRenderer renderer(o);
+  const PowerLineScene first = renderer.Capture(renderer.DefaultNoiseSeed());
+  const PowerLineScene reference = RenderPowerLineScene(o);
+  EXPECT_EQ(cv::norm(first.left, reference.left, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(first.right, reference.right, cv::NORM_INF), 0.0);
+  EXPECT_DOUBLE_EQ(first.obstacles[0].distance_m, reference.obstacles[0].distance_m);
+  const PowerLineScene other = renderer.Capture(77);
+  o.sensor.noise_seed = 77;
+  const PowerLineScene other_reference = RenderPowerLineScene(o);
+  EXPECT_EQ(cv::norm(other.left, other_reference.left, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(other.left, first.left, cv::NORM_L1), 0.0);
+}
+
 TEST(RenderPowerLineScene, IdealRectifiedPairMatchesTheGroundTruthDisparity) {
   PowerLineSceneOptions o = SmallScene();
   o.obstacles = {{ObstacleType::kDamper, 1.2, 0}};
