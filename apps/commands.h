@@ -11,5 +11,6 @@ int RunCloud(int argc, char** argv);
 int RunRange(int argc, char** argv);
 int RunEvalRanging(int argc, char** argv);  // `linesight eval ranging`, dispatched by eval.cc
 int RunBench(int argc, char** argv);
+int RunRender(int argc, char** argv);
 
 }  // namespace linesight::cli

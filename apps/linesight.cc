@@ -22,6 +22,7 @@ constexpr Subcommand kSubcommands[] = {
     {"cloud", linesight::cli::RunCloud, "point cloud (PLY, metres) and depth PNG from a disparity map"},
     {"range", linesight::cli::RunRange, "distance +- sigma to obstacles in ROIs or found automatically"},
     {"bench", linesight::cli::RunBench, "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
+    {"render", linesight::cli::RunRender, "synthetic power-line scene + calibration boards with exact ground truth"},
 };
 
 void PrintUsage(std::FILE* out) {
