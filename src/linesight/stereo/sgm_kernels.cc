@@ -126,13 +126,15 @@ void PrepareCostRow(const CostInput& in, int y, int padded, AlignedVector<uint64
 }
 
 // Costs of pixel x for k in [0, padded) into out.
-HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, uint16_t* HWY_RESTRICT out) {
+// T = uint8_t is only used without the BT term (MaxMatchingCost <= 64).
+template <typename T>
+HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, T* HWY_RESTRICT out) {
   const CostInput& in = *ctx.input;
   const int padded = ctx.padded;
   const size_t base = static_cast<size_t>(in.width - 1 - x);
   {
     const hn::ScalableTag<uint64_t> d64;
-    const hn::Rebind<uint16_t, decltype(d64)> d16h;
+    const hn::Rebind<T, decltype(d64)> d16h;
     const size_t n64 = hn::Lanes(d64);
     const auto left = hn::Set(d64, ctx.census_left[x]);
     for (int k = 0; k < padded; k += static_cast<int>(n64)) {
@@ -141,7 +143,8 @@ HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, uint16_t* HWY_RESTRI
       hn::StoreU(hn::TruncateTo(d16h, hamming), d16h, out + k);
     }
   }
-  if (in.bt_weight > 0) {
+  if constexpr (sizeof(T) == 2) {
+    if (in.bt_weight > 0) {
     const hn::ScalableTag<uint16_t> d16;
     const size_t n16 = hn::Lanes(d16);
     const size_t n = ctx.reversed_size;
@@ -160,9 +163,10 @@ HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, uint16_t* HWY_RESTRI
       const auto term = hn::ShiftRight<4>(hn::Mul(bt, weight));
       hn::StoreU(hn::Add(hn::LoadU(d16, out + k), term), d16, out + k);
     }
+    }
   }
   // Disparities whose right pixel leaves the image: x - min_disparity - k < 0 or >= width.
-  const uint16_t max_cost = static_cast<uint16_t>(ctx.max_cost);
+  const T max_cost = static_cast<T>(ctx.max_cost);
   const int num = in.num_disparities;
   const int first_left_out = std::max(0, x - in.min_disparity + 1);
   for (int k = first_left_out; k < num; ++k) out[k] = max_cost;
@@ -176,13 +180,22 @@ void MatchingCostRowImpl(const CostInput& in, int y, uint16_t* out) {
   AlignedVector<uint16_t> bt_reversed, bt_left;
   CostRowContext ctx;
   PrepareCostRow(in, y, padded, &census_reversed, &bt_reversed, &bt_left, &ctx);
-  for (int x = 0; x < in.width; ++x) PixelCost(ctx, x, out + static_cast<size_t>(x) * padded);
+  for (int x = 0; x < in.width; ++x) PixelCost<uint16_t>(ctx, x, out + static_cast<size_t>(x) * padded);
 }
 
 // ------------------------------------------------------------------------------------------ aggregation
+// Path costs are uint8 when MaxMatchingCost + P2 <= 255 (census without BT and P2 <= 191: twice the lanes per
+// vector), uint16 otherwise. Either way every path cost stays below its sentinel and results are identical.
+template <typename T>
+constexpr T PathSentinel() {
+  return sizeof(T) == 1 ? T{0xFF} : static_cast<T>(kSgmPathSentinel);
+}
+
 // Path buffers of one sweep: for each of the three paths that come from the previous row (vertical, diagonal,
 // anti-diagonal) two rows (by parity of the sweep step) of `width` slots, plus two slots of the horizontal
-// path.
+// path. Slot s occupies [s * slot, (s + 1) * slot): kSgmLaneAlign guard lanes, then `padded` data lanes; the
+// guard of the next slot (or the trailing guard) follows the data. After the slots: per-path minima (6 rows of
+// width), the horizontal minima, the pixel's costs, and an all-zero slot for the first pixel of each path.
 struct SweepLayout {
   int width = 0;
   int padded = 0;
@@ -191,12 +204,12 @@ struct SweepLayout {
     return (static_cast<size_t>(path) * 2 + parity) * width * slot;
   }
   size_t Horizontal(int parity) const { return 6 * static_cast<size_t>(width) * slot + parity * slot; }
-  // Slot s occupies [s * slot, (s + 1) * slot): kSgmLaneAlign guard lanes, then `padded` data lanes; the guard
-  // of the next slot (or the trailing guard) follows the data.
-  size_t Minima(int path, int parity) const {  // into the minima area after the slots
-    return (static_cast<size_t>(path) * 2 + parity) * width;
-  }
-  size_t TotalLanes() const { return 6 * static_cast<size_t>(width) * slot + 2 * slot + kSgmLaneAlign; }
+  size_t Slots() const { return 6 * static_cast<size_t>(width) * slot + 2 * slot + kSgmLaneAlign; }
+  size_t Minima(int path, int parity) const { return Slots() + (static_cast<size_t>(path) * 2 + parity) * width; }
+  size_t HorizontalMinima() const { return Slots() + 6 * static_cast<size_t>(width); }
+  size_t Cost() const { return HorizontalMinima() + kSgmLaneAlign; }
+  size_t ZeroSlot() const { return Cost() + padded + kSgmLaneAlign; }
+  size_t Total() const { return ZeroSlot() + padded + kSgmLaneAlign; }
 };
 
 SweepLayout MakeLayout(int width, int num_disparities) {
@@ -207,40 +220,78 @@ SweepLayout MakeLayout(int width, int num_disparities) {
   return layout;
 }
 
-// Previous-pixel state of one path for the current pixel. A path that starts at this pixel reads an all-zero
+// Previous-pixel state of one path for the current pixel. A path that starts at this pixel reads the all-zero
 // slot with prev_min 0, for which the recurrence reduces to L = C.
+template <typename T>
 struct PathStep {
-  const uint16_t* prev = nullptr;  // data lanes of the predecessor's L
-  uint16_t prev_min = 0;
-  uint16_t p2 = 0;
-  uint16_t* cur = nullptr;
-  uint16_t* cur_min = nullptr;
+  const T* prev = nullptr;  // data lanes of the predecessor's L
+  T prev_min = 0;
+  T jump = 0;  // prev_min + P2', saturated to T (harmless: the minimum never exceeds the largest path cost)
+  T* cur = nullptr;
+  T* cur_min = nullptr;
 };
 
-// One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and stores or
-// adds their sum to the other sweep's partial sum in `sum`, writing the final S into `total`. Chunks at or beyond num_disparities get the sentinel in the padding lanes.
-template <int kPaths, bool kAdd>
-HWY_INLINE void AggregatePixel(const uint16_t* HWY_RESTRICT cost, const PathStep* steps, int full_chunks_end,
-                               int padded, size_t tail_valid_first, uint16_t p1,
-                               uint16_t* HWY_RESTRICT sum, uint16_t* HWY_RESTRICT total) {
-  const hn::ScalableTag<uint16_t> d;
+// Smallest lane of a uint8 or uint16 vector (Highway 1.0.3 has no MinOfLanes for uint8).
+template <class D, class V>
+HWY_INLINE hn::TFromD<D> SmallestLane(D d, V v) {
+  if constexpr (sizeof(hn::TFromD<D>) == 1) {
+    const hn::Repartition<uint16_t, D> d16;
+    const auto pairs = hn::BitCast(d16, v);
+    const auto m = hn::Min(hn::And(pairs, hn::Set(d16, uint16_t{0xFF})), hn::ShiftRight<8>(pairs));
+    return static_cast<uint8_t>(hn::GetLane(hn::MinOfLanes(d16, m)));
+  } else {
+    return hn::GetLane(hn::MinOfLanes(d, v));
+  }
+}
+
+// Adds the uint16 lanes of the path-cost vector l (of T) into acc0 (and acc1 for the upper half of uint8).
+template <class D, class DW, class V, class VW>
+HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
+#if HWY_TARGET != HWY_SCALAR
+  if constexpr (sizeof(hn::TFromD<D>) == 1) {
+    const hn::Half<D> dh;
+    *acc0 = hn::Add(*acc0, hn::PromoteTo(dw, hn::LowerHalf(dh, l)));
+    *acc1 = hn::Add(*acc1, hn::PromoteTo(dw, hn::UpperHalf(dh, l)));
+  } else
+#endif
+  {
+    (void)d;
+    (void)dw;
+    (void)acc1;
+    *acc0 = hn::Add(*acc0, l);
+  }
+}
+
+// One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and either streams
+// their sum into `partial` (first sweep over this row) or adds the other sweep's partial sum and writes the final
+// S into `total`.
+template <typename T, int kPaths, bool kAdd>
+HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* steps, int full_chunks_end,
+                               int padded, size_t tail_valid_first, T p1, uint16_t* HWY_RESTRICT partial,
+                               uint16_t* HWY_RESTRICT total) {
+  const hn::ScalableTag<T> d;
   using V = hn::Vec<decltype(d)>;
+  // Sum lanes: uint16 covering the same disparities as one vector of T.
+  using DW = std::conditional_t<sizeof(T) == 1, hn::Rebind<uint16_t, hn::Half<decltype(d)>>, decltype(d)>;
+  const DW dw;
+  using VW = hn::Vec<DW>;
   const int n = static_cast<int>(hn::Lanes(d));
+  const int nw = static_cast<int>(hn::Lanes(dw));
   const V p1v = hn::Set(d, p1);
-  const V sentinel = hn::Set(d, kSgmPathSentinel);
-  const uint16_t* prev[kPaths];
-  uint16_t* cur[kPaths];
+  const V sentinel = hn::Set(d, PathSentinel<T>());
+  const T* prev[kPaths];
+  T* cur[kPaths];
   V prev_min[kPaths], jump[kPaths], minima[kPaths];
   for (int p = 0; p < kPaths; ++p) {
     prev[p] = steps[p].prev;
     cur[p] = steps[p].cur;
     prev_min[p] = hn::Set(d, steps[p].prev_min);
-    jump[p] = hn::Set(d, static_cast<uint16_t>(steps[p].prev_min + steps[p].p2));
+    jump[p] = hn::Set(d, steps[p].jump);
     minima[p] = sentinel;
   }
-  auto chunk = [&](int k, bool partial, size_t valid_lanes) HWY_ATTR {
+  auto chunk = [&](int k, bool partial_chunk, size_t valid_lanes) HWY_ATTR {
     const V c = hn::LoadU(d, cost + k);
-    V acc;
+    VW acc0 = hn::Zero(dw), acc1 = hn::Zero(dw);
     for (int p = 0; p < kPaths; ++p) {
       const V same = hn::LoadU(d, prev[p] + k);
       const V below = hn::LoadU(d, prev[p] + k - 1);
@@ -248,44 +299,45 @@ HWY_INLINE void AggregatePixel(const uint16_t* HWY_RESTRICT cost, const PathStep
       V best = hn::Min(same, hn::SaturatedAdd(hn::Min(below, above), p1v));
       best = hn::Min(best, jump[p]);
       V l = hn::Add(c, hn::Sub(best, prev_min[p]));
-      if (partial) l = hn::IfThenElse(hn::FirstN(d, valid_lanes), l, sentinel);
+      if (partial_chunk) l = hn::IfThenElse(hn::FirstN(d, valid_lanes), l, sentinel);
       hn::StoreU(l, d, cur[p] + k);
       minima[p] = hn::Min(minima[p], l);
-      acc = p == 0 ? l : hn::SaturatedAdd(acc, l);
+      Accumulate(d, dw, l, &acc0, &acc1);
     }
     if (kAdd) {
-      hn::StoreU(hn::SaturatedAdd(acc, hn::Load(d, sum + k)), d, total + k);
+      hn::StoreU(hn::Add(acc0, hn::Load(dw, partial + k)), dw, total + k);
+      if (sizeof(T) == 1) hn::StoreU(hn::Add(acc1, hn::Load(dw, partial + k + nw)), dw, total + k + nw);
     } else {
-      hn::Stream(acc, d, sum + k);  // written once, read by the other sweep much later: bypass the caches
+      hn::Stream(acc0, dw, partial + k);  // read by the other sweep much later: bypass the caches
+      if (sizeof(T) == 1) hn::Stream(acc1, dw, partial + k + nw);
     }
   };
   int k = 0;
   for (; k < full_chunks_end; k += n) chunk(k, false, 0);
-  for (; k < padded; k += n) {
-    chunk(k, true, k == full_chunks_end ? tail_valid_first : 0);
-  }
-  for (int p = 0; p < kPaths; ++p) *steps[p].cur_min = hn::GetLane(hn::MinOfLanes(d, minima[p]));
+  for (; k < padded; k += n) chunk(k, true, k == full_chunks_end ? tail_valid_first : 0);
+  for (int p = 0; p < kPaths; ++p) *steps[p].cur_min = SmallestLane(d, minima[p]);
 }
 
 // Sweep steps [step_begin, step_end): step t is row t (forward) or row height-1-t (backward). Forward paths come
 // from the left, top, top-left and top-right; backward paths from the right, bottom, bottom-right, bottom-left.
-template <int kPaths, bool kAdd>
-void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end,
-                const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
+template <typename T, int kPaths, bool kAdd>
+void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end, const uint16_t* p2_table,
+                SumVolume* sum, T* base, SweepScratch* scratch, const RowDone* row_done) {
   const CostInput& cin = in.cost;
-  const int w = cin.width, h = cin.height;
-  const SweepLayout layout = MakeLayout(w, cin.num_disparities);
+  const int w = cin.width, h = cin.height, num = cin.num_disparities;
+  const SweepLayout layout = MakeLayout(w, num);
   const int padded = layout.padded;
-  const int n = static_cast<int>(hn::Lanes(hn::ScalableTag<uint16_t>()));
-  const int full_chunks_end = cin.num_disparities / n * n;
-  const size_t tail_valid_first = static_cast<size_t>(cin.num_disparities - full_chunks_end);
-  uint16_t* base = scratch->buffers.data();
-  uint16_t* minima = base + layout.TotalLanes();
-  uint16_t* horizontal_min = minima + 6 * static_cast<size_t>(w);  // 2 entries
-  uint16_t* cost = horizontal_min + 2 + (kSgmLaneAlign - 2);        // padded lanes
-  const uint16_t* zero_slot = cost + padded + kSgmLaneAlign;        // padded zero lanes after a guard
+  const int n = static_cast<int>(hn::Lanes(hn::ScalableTag<T>()));
+  const int full_chunks_end = num / n * n;
+  const size_t tail_valid_first = static_cast<size_t>(num - full_chunks_end);
+  T* minima = base + layout.Minima(0, 0);
+  T* horizontal_min = base + layout.HorizontalMinima();
+  T* cost = base + layout.Cost();
+  const T* zero_slot = base + layout.ZeroSlot();
   const int guard = kSgmLaneAlign;
-  const uint16_t p1 = static_cast<uint16_t>(in.p1);
+  const T p1 = static_cast<T>(in.p1);
+  constexpr int kMaxT = sizeof(T) == 1 ? 0xFF : 0xFFFF;
+  auto jump = [&](T prev_min, int step) { return static_cast<T>(std::min(kMaxT, prev_min + p2_table[step])); };
   CostRowContext ctx;
   for (int t = step_begin; t < step_end; ++t) {
     const int y = direction > 0 ? t : h - 1 - t;
@@ -294,26 +346,26 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
     PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed, &scratch->bt_left, &ctx);
     const uint8_t* gray = cin.gray_left + static_cast<size_t>(y) * w;
     const uint8_t* gray_prev = t > 0 ? cin.gray_left + static_cast<size_t>(prev_y) * w : nullptr;
-    uint16_t* sum_row = sum->Row(y);
+    uint16_t* partial_row = sum->Row(y);
     uint16_t* total_row = scratch->total_row.data();
     for (int i = 0; i < w; ++i) {
       const int x = direction > 0 ? i : w - 1 - i;
       if (kAdd && i + 4 < w) {
-        const uint16_t* ahead = sum_row + static_cast<size_t>(x + 4 * direction) * padded;
+        const uint16_t* ahead = partial_row + static_cast<size_t>(x + 4 * direction) * padded;
         for (int line = 0; line < padded; line += 32) hwy::Prefetch(ahead + line);
       }
-      PixelCost(ctx, x, cost);
-      PathStep steps[kPaths];
+      PixelCost<T>(ctx, x, cost);
+      PathStep<T> steps[kPaths];
       // Horizontal path from x - direction.
       {
-        PathStep& s = steps[0];
+        PathStep<T>& s = steps[0];
         const int hp = i & 1;
         s.cur = base + layout.Horizontal(hp) + guard;
         s.cur_min = &horizontal_min[hp];
         if (i > 0) {
           s.prev = base + layout.Horizontal(1 - hp) + guard;
           s.prev_min = horizontal_min[1 - hp];
-          s.p2 = p2_table[std::abs(gray[x] - gray[x - direction])];
+          s.jump = jump(s.prev_min, std::abs(gray[x] - gray[x - direction]));
         } else {
           s.prev = zero_slot;
         }
@@ -321,52 +373,68 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
       // Paths from the previous row: vertical (dx = 0), diagonal (dx = -direction), anti-diagonal (+direction).
       for (int p = 0; p + 1 < kPaths; ++p) {
         const int dx = p == 0 ? 0 : (p == 1 ? -direction : direction);
-        PathStep& s = steps[p + 1];
+        PathStep<T>& s = steps[p + 1];
         s.cur = base + layout.RowBuffer(p, cur_parity) + static_cast<size_t>(x) * layout.slot + guard;
-        s.cur_min = minima + layout.Minima(p, cur_parity) + x;
+        s.cur_min = base + layout.Minima(p, cur_parity) + x;
         const int px = x + dx;
         if (t > 0 && px >= 0 && px < w) {
           s.prev = base + layout.RowBuffer(p, prev_parity) + static_cast<size_t>(px) * layout.slot + guard;
-          s.prev_min = minima[layout.Minima(p, prev_parity) + px];
-          s.p2 = p2_table[std::abs(gray[x] - gray_prev[px])];
+          s.prev_min = base[layout.Minima(p, prev_parity) + px];
+          s.jump = jump(s.prev_min, std::abs(gray[x] - gray_prev[px]));
         } else {
           s.prev = zero_slot;
         }
       }
-      AggregatePixel<kPaths, kAdd>(cost, steps, full_chunks_end, padded, tail_valid_first, p1,
-                                   sum_row + static_cast<size_t>(x) * padded,
-                                   total_row + static_cast<size_t>(x) * padded);
+      (void)minima;
+      uint16_t* total = total_row + static_cast<size_t>(x) * padded;
+      AggregatePixel<T, kPaths, kAdd>(cost, steps, full_chunks_end, padded, tail_valid_first, p1,
+                                      partial_row + static_cast<size_t>(x) * padded, total);
+      // Padding lanes of the final S hold 0xFFFF so that no winner-takes-all can pick them.
+      if (kAdd && num != padded) std::fill(total + num, total + padded, uint16_t{0xFFFF});
     }
     if (kAdd && row_done != nullptr && *row_done) (*row_done)(y, total_row);
   }
   if (!kAdd) hwy::FlushStream();
 }
 
-void SweepImpl(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
-               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
+template <typename T>
+void SweepTyped(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
+                const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
   const SweepLayout layout = MakeLayout(in.cost.width, in.cost.num_disparities);
-  scratch->total_row.resize(static_cast<size_t>(in.cost.width) * layout.padded);
-  // Slots, minima, horizontal minima (padded to a vector), the pixel's costs, a guard and the zero slot.
-  const size_t total = layout.TotalLanes() + 6 * static_cast<size_t>(in.cost.width) + kSgmLaneAlign +
-                       layout.padded + kSgmLaneAlign + layout.padded + kSgmLaneAlign;
-  if (step_begin == 0 || scratch->buffers.size() != total) {
-    scratch->buffers.assign(total, kSgmPathSentinel);
-    uint16_t* zero = scratch->buffers.data() + total - kSgmLaneAlign - layout.padded;
-    std::fill(zero, zero + layout.padded, uint16_t{0});
+  const size_t bytes = layout.Total() * sizeof(T);
+  if (step_begin == 0 || scratch->buffers.size() != bytes) {
+    scratch->buffers.resize(bytes);
+    T* base = reinterpret_cast<T*>(scratch->buffers.data());
+    std::fill(base, base + layout.Total(), PathSentinel<T>());
+    std::fill(base + layout.ZeroSlot(), base + layout.ZeroSlot() + layout.padded, T{0});
   }
-  if (in.num_paths == 8) {
-    if (add) {
-      SweepSteps<4, true>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+  T* base = reinterpret_cast<T*>(scratch->buffers.data());
+  const bool eight = in.num_paths == 8;
+  if (add) {
+    if (eight) {
+      SweepSteps<T, 4, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
     } else {
-      SweepSteps<4, false>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+      SweepSteps<T, 2, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
     }
   } else {
-    if (add) {
-      SweepSteps<2, true>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+    if (eight) {
+      SweepSteps<T, 4, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
     } else {
-      SweepSteps<2, false>(in, direction, step_begin, step_end, p2_table, sum, scratch, row_done);
+      SweepSteps<T, 2, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
     }
   }
+}
+
+void SweepImpl(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
+               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
+  scratch->total_row.resize(static_cast<size_t>(in.cost.width) * PaddedDisparities(in.cost.num_disparities));
+#if HWY_TARGET != HWY_SCALAR  // one lane per vector: nothing to gain from uint8 lanes
+  if (UsesNarrowPathCosts(in)) {
+    SweepTyped<uint8_t>(in, direction, step_begin, step_end, add, p2_table, sum, scratch, row_done);
+    return;
+  }
+#endif
+  SweepTyped<uint16_t>(in, direction, step_begin, step_end, add, p2_table, sum, scratch, row_done);
 }
 
 // ------------------------------------------------------------------------------------- winner-takes-all

@@ -93,14 +93,15 @@ struct Config {
   int threads = 1;
   int bt_weight = 0;
   int alpha = 0;
+  int p2 = SgmOptions().p2;
   SgmSubpixel subpixel = SgmSubpixel::kEquiangular;
   int census_width = 9, census_height = 7;
 };
 
 std::string Describe(const Config& c) {
-  return fmt::format("{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} subpixel={} census={}x{}",
+  return fmt::format("{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} p2={} subpixel={} census={}x{}",
                      c.width, c.height, c.min_disparity, c.num_disparities, c.paths, c.threads, c.bt_weight,
-                     c.alpha, static_cast<int>(c.subpixel), c.census_width, c.census_height);
+                     c.alpha, c.p2, static_cast<int>(c.subpixel), c.census_width, c.census_height);
 }
 
 SgmOptions OptionsFor(const Config& c) {
@@ -111,6 +112,7 @@ SgmOptions OptionsFor(const Config& c) {
   o.threads = c.threads;
   o.bt_weight = c.bt_weight;
   o.p2_gradient_alpha = c.alpha;
+  o.p2 = c.p2;
   o.subpixel = c.subpixel;
   o.census_width = c.census_width;
   o.census_height = c.census_height;
@@ -295,7 +297,8 @@ detail::CostInput CostInputFor(const Config& c, const Reference& r, const std::v
 }
 
 // Configurations: odd sizes, num-disp 37 and 64, min-disp 0 / positive / negative, 4 and 8 paths, 1 and 2
-// threads, BT on/off, gradient-adapted P2 on/off, both subpixel modes, a non-default census window.
+// threads, uint8 and uint16 path costs, BT on/off, gradient-adapted P2 on/off, both subpixel modes, a
+// non-default census window.
 std::vector<Config> Configs() {
   std::vector<Config> configs;
   Config c;
@@ -305,6 +308,10 @@ std::vector<Config> Configs() {
   c.paths = 4;
   c.threads = 2;
   configs.push_back(c);
+  c.p2 = 300;  // census only, but too large a P2 for uint8 path costs
+  c.paths = 8;
+  configs.push_back(c);
+  c.p2 = SgmOptions().p2;
   c.num_disparities = 37;
   c.min_disparity = -3;
   c.paths = 8;

@@ -15,9 +15,9 @@
 
 namespace linesight::detail {
 
-// Disparity lanes are padded to a multiple of this (the widest vector: 32 uint16 = 64 bytes) so every SIMD
+// Disparity lanes are padded to a multiple of this (the widest vector: 64 uint8 = 64 bytes) so every SIMD
 // target sees the same memory layout.
-inline constexpr int kSgmLaneAlign = 32;
+inline constexpr int kSgmLaneAlign = 64;
 // Path costs of padding lanes and of the guards around each disparity vector: large enough never to win a
 // minimum (path costs stay below kSgmMaxPathCost), small enough that adding P1 / P2 does not saturate.
 inline constexpr uint16_t kSgmPathSentinel = 0x7FFF;
@@ -103,9 +103,15 @@ struct SumVolume {
   uint16_t* Row(int y) { return data.data() + static_cast<size_t>(y) * width * padded; }
 };
 
+// Path costs fit in uint8 when every one stays below 255: L <= max matching cost + P2. The census-only cost
+// qualifies for P2 <= 191; the uint8 kernels process twice the disparities per vector.
+inline bool UsesNarrowPathCosts(const AggregationInput& input) {
+  return input.cost.bt_weight == 0 && MaxMatchingCost(input.cost) + input.p2 <= 254;
+}
+
 // Scratch of one sweep direction (reused between frames).
 struct SweepScratch {
-  AlignedVector<uint16_t> buffers;
+  AlignedVector<uint8_t> buffers;  // path costs (uint8 or uint16 lanes, see UsesNarrowPathCosts)
   AlignedVector<uint64_t> census_reversed;
   AlignedVector<uint16_t> bt_reversed;
   AlignedVector<uint16_t> bt_left;
