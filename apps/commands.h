@@ -11,6 +11,9 @@ int RunCloud(int argc, char** argv);
 int RunRange(int argc, char** argv);
 int RunEvalRanging(int argc, char** argv);  // `linesight eval ranging`, dispatched by eval.cc
 int RunBench(int argc, char** argv);
+int RunCalibrate(int argc, char** argv);
+int RunPattern(int argc, char** argv);
+int RunEvalCalibration(int argc, char** argv);  // `linesight eval calibration`, dispatched by eval.cc
 int RunRender(int argc, char** argv);
 
 }  // namespace linesight::cli

@@ -23,6 +23,8 @@ constexpr Subcommand kSubcommands[] = {
     {"range", linesight::cli::RunRange, "distance +- sigma to obstacles in ROIs or found automatically"},
     {"bench", linesight::cli::RunBench, "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
     {"render", linesight::cli::RunRender, "synthetic power-line scene + calibration boards with exact ground truth"},
+    {"calibrate", linesight::cli::RunCalibrate, "stereo calibration from board images (zhang | recon | opencv)"},
+    {"pattern", linesight::cli::RunPattern, "render an LCD calibration target with its exact square size"},
 };
 
 void PrintUsage(std::FILE* out) {
