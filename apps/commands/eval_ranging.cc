@@ -395,11 +395,11 @@ int RunEvalRanging(int argc, char** argv) {
       for (double distance : distances) {
         std::vector<std::vector<RangeResult>> results(calibs.size());
         std::vector<double> truths;
+        sim::PowerLineSceneOptions o = scene_options;
+        o.obstacles = {{types[t], distance, 0}};
+        const sim::PowerLineSceneRenderer renderer(o);  // ray cast once, fresh sensor noise per run
         for (int run = 0; run < runs; ++run) {
-          sim::PowerLineSceneOptions o = scene_options;
-          o.obstacles = {{types[t], distance, 0}};
-          o.sensor.noise_seed = std::uint64_t(run) * 7919 + 17;
-          const sim::PowerLineScene scene = sim::RenderPowerLineScene(o);
+          const sim::PowerLineScene scene = renderer.Capture(std::uint64_t(run) * 7919 + 17);
           const sim::RenderedObstacle& obstacle = scene.obstacles.front();
           truths.push_back(obstacle.distance_m);
           cv::Rect roi = obstacle.box;

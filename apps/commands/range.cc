@@ -40,8 +40,14 @@ int RunRange(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-depth", options.max_depth_m, "working range: farthest depth searched (m)")
       ->capture_default_str();
+  app.add_option("--min-body-width", options.ranging.min_body_width_m,
+                 "drop thinner structures (conductors) inside an ROI before ranging (m, 0 = keep)")
+      ->capture_default_str();
   app.add_option("--threads", options.threads, "matcher threads (0 = all cores)")
       ->capture_default_str();
+  app.add_flag(
+      "!--no-search-from-zero", options.search_from_zero,
+      "search only the working range's disparities (the background may then match falsely)");
   app.add_option("--disparity-out", disparity_out, "also write the disparity (PFM)");
   app.add_option("--json", json_path, "report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {

@@ -7,6 +7,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/ranging/thin_structures.h"
 
 namespace linesight {
 
@@ -46,30 +47,14 @@ std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const Stereo
     }
   }
 
-  // Thick pixels: inside a surface of neighbouring bands (k-1..k+1) by at least min_width / 2 at
-  // that depth.
-  cv::Mat thick(disparity.size(), CV_8U, cv::Scalar(0));
-  cv::Mat mask(disparity.size(), CV_8U), distance;
-  for (int k = 0; k < bands; ++k) {
-    if (cv::countNonZero(band_of == k) == 0) continue;
-    cv::inRange(band_of, k - 1, k + 1, mask);
-    // Pad so that the image border does not count as a surface edge: it clips obstacles, not
-    // conductors.
-    cv::Mat padded;
-    cv::copyMakeBorder(mask, padded, 1, 1, 1, 1, cv::BORDER_REPLICATE);
-    cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
-    const double d_band = std::exp(log_low + (k + 0.5) * band) - offset;
-    const double radius_px =
-        0.5 * options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d_band);
-    for (int y = 0; y < disparity.rows; ++y) {
-      const int* b = band_of.ptr<int>(y);
-      const float* dt = distance.ptr<float>(y + 1) + 1;
-      uchar* t = thick.ptr<uchar>(y);
-      for (int x = 0; x < disparity.cols; ++x) {
-        if (b[x] == k && dt[x] >= radius_px) t[x] = 255;
-      }
-    }
-  }
+  // Thick pixels: deep inside a body of at least min_width at its depth.
+  ThinStructureOptions thin;
+  thin.min_width_m = options.min_width_m;
+  thin.depth_band_relative = options.depth_band_relative;
+  thin.min_depth_m = options.min_depth_m;
+  thin.max_depth_m = options.max_depth_m;
+  const cv::Mat thick =
+      BodyMask(disparity, geometry, cv::Rect(0, 0, disparity.cols, disparity.rows), thin, true);
 
   // Regions: connected thick pixels, grown back by the erosion radius over pixels of similar depth.
   cv::Mat labels, stats, centroids;

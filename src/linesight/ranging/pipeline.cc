@@ -21,12 +21,6 @@ RangingPipeline::RangingPipeline(const StereoCalibration& calib,
                                  const RangingPipelineOptions& options)
     : options_(options) {
   options_.Check();
-  options_.ranging.min_depth_m = options_.min_depth_m;
-  options_.ranging.max_depth_m = options_.max_depth_m;
-  options_.finder.min_depth_m = options_.min_depth_m;
-  options_.finder.max_depth_m = options_.max_depth_m;
-  options_.ranging.Check();
-  options_.finder.Check();
   if (options_.input_rectified) {
     rectified_calibration_ = calib;
   } else {
@@ -36,10 +30,26 @@ RangingPipeline::RangingPipeline(const StereoCalibration& calib,
   geometry_ = GeometryFromCalibration(rectified_calibration_);
   disparity_range_ = DisparityRangeForDepths(geometry_, options_.min_depth_m, options_.max_depth_m,
                                              options_.disparity_margin_px);
+  // Ranging keeps the disparities of the searched range: the working range plus the margin.
+  const double near = geometry_.DepthFromDisparity(disparity_range_.max_disparity());
+  const double far = disparity_range_.min_disparity + geometry_.disparity_offset_px > 0
+                         ? geometry_.DepthFromDisparity(disparity_range_.min_disparity)
+                         : 10.0 * options_.max_depth_m;
+  options_.ranging.min_depth_m = near;
+  options_.ranging.max_depth_m = far;
+  options_.finder.min_depth_m = near;
+  options_.finder.max_depth_m = far;
+  options_.ranging.Check();
+  options_.finder.Check();
+  search_range_ = disparity_range_;
+  if (options_.search_from_zero) {
+    search_range_.min_disparity = 0;
+    search_range_.num_disparities = disparity_range_.max_disparity() + 1;
+  }
   method_ = options_.method.empty() ? DefaultMatcherName() : options_.method;
   MatcherOptions matcher_options;
-  matcher_options.min_disparity = disparity_range_.min_disparity;
-  matcher_options.num_disparities = disparity_range_.num_disparities;
+  matcher_options.min_disparity = search_range_.min_disparity;
+  matcher_options.num_disparities = search_range_.num_disparities;
   matcher_options.threads = options_.threads;
   matcher_options.params = options_.params;
   matcher_ = CreateMatcher(method_, matcher_options);
@@ -72,7 +82,7 @@ RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
   // near the robot (large disparity) often sit there. Padding both images on the left by
   // max_disparity columns lets every pixel whose match lies inside the right image be matched; the
   // padding is cut off afterwards.
-  const int pad = std::max(0, disparity_range_.max_disparity());
+  const int pad = std::max(0, search_range_.max_disparity());
   cv::Mat left_padded, right_padded;
   cv::copyMakeBorder(frame.left_rectified.rowRange(band), left_padded, 0, 0, pad, 0,
                      cv::BORDER_REPLICATE);

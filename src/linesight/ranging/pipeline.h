@@ -27,11 +27,18 @@ struct RangingPipelineOptions {
   double min_depth_m = 0.3;  // working range: the matcher searches exactly the disparities
   double max_depth_m = 6.0;  //   of these depths (m), plus disparity_margin_px on each side
   int disparity_margin_px = 2;
+  // Search from disparity 0 instead of from the far end of the working range. Costs a few
+  // disparities; the background beyond max_depth_m then matches at its true disparity (and is
+  // ignored by ranging) instead of being forced into a false match inside the working range.
+  bool search_from_zero = false;
   bool input_rectified =
       false;  // the pair is already rectified: skip remapping, use P1 P2 Q as given
   RectifyOptions rectify;
-  RangingOptions ranging;        // its min/max depth are overwritten by the working range above
-  ObstacleFinderOptions finder;  // likewise
+  // Their min/max depth are overwritten by the depths of the searched disparity range (the working
+  // range widened by disparity_margin_px), so that an obstacle right at max_depth_m keeps all its
+  // pixels.
+  RangingOptions ranging;
+  ObstacleFinderOptions finder;
 
   void Check() const;
 };
@@ -57,7 +64,9 @@ class RangingPipeline {
 
   const StereoCalibration& rectified_calibration() const { return rectified_calibration_; }
   const StereoGeometry& geometry() const { return geometry_; }
+  // Disparities of the working range (DisparityRangeForDepths) and the range the matcher searches.
   const DisparityRange& disparity_range() const { return disparity_range_; }
+  const DisparityRange& search_range() const { return search_range_; }
   const StereoMatcher& matcher() const { return *matcher_; }
   const std::string& method() const { return method_; }
 
@@ -67,6 +76,7 @@ class RangingPipeline {
   StereoCalibration rectified_calibration_;
   StereoGeometry geometry_;
   DisparityRange disparity_range_;
+  DisparityRange search_range_;
   std::string method_;
   std::unique_ptr<StereoMatcher> matcher_;
 };

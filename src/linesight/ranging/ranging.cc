@@ -8,6 +8,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/ranging/thin_structures.h"
 
 namespace linesight {
 
@@ -42,6 +43,8 @@ void RangingOptions::Check() const {
               "must be >= 1");
   CheckOption(min_valid_fraction >= 0.0 && min_valid_fraction <= 1.0,
               "RangingOptions.min_valid_fraction", min_valid_fraction, "must be in [0, 1]");
+  CheckOption(min_body_width_m >= 0.0, "RangingOptions.min_body_width_m", min_body_width_m,
+              "must be >= 0 (0 = keep thin structures)");
   CheckOption(mode_bin_relative > 0.0 && mode_bin_relative <= 0.5,
               "RangingOptions.mode_bin_relative", mode_bin_relative, "must be in (0, 0.5]");
   CheckOption(mode_valley_fraction >= 0.0 && mode_valley_fraction < 1.0,
@@ -158,6 +161,26 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
                             100.0 * options.min_valid_fraction));
   }
 
+  // Stage 1b: drop thin structures (a conductor passing in front of or behind the obstacle).
+  if (options.min_body_width_m > 0.0) {
+    ThinStructureOptions thin;
+    thin.min_width_m = options.min_body_width_m;
+    thin.min_depth_m = options.min_depth_m;
+    thin.max_depth_m = options.max_depth_m;
+    const cv::Mat body = BodyMask(disparity, geometry, roi, thin);
+    std::vector<float> body_values;
+    for (int y = 0; y < view.rows; ++y) {
+      for (int x = 0; x < view.cols; ++x) {
+        if (valid.at<uchar>(y, x) && body.at<uchar>(y, x))
+          body_values.push_back(view.at<float>(y, x));
+      }
+    }
+    if (int(body_values.size()) >= options.min_valid_pixels) {
+      valid &= body;
+      values = std::move(body_values);
+    }
+  }
+
   // Stage 2: histogram of log-disparity (bins of equal relative depth width), smoothed with [1 2
   // 1].
   const double offset = geometry.disparity_offset_px;
@@ -172,6 +195,7 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
     return 1 + std::clamp(int((log_of(d) - log_low) / options.mode_bin_relative), 0, bins - 1);
   };
   for (float d : values) histogram[size_t(bin_of(d))] += 1.0;
+  const int n_used = int(values.size());
   std::vector<double> smoothed(histogram.size(), 0.0);
   for (size_t i = 1; i + 1 < histogram.size(); ++i) {
     smoothed[i] = 0.25 * histogram[i - 1] + 0.5 * histogram[i] + 0.25 * histogram[i + 1];
@@ -187,7 +211,7 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
     int j = i;
     double support = 0.0;
     while (j >= 1 && smoothed[size_t(j)] > level) support += histogram[size_t(j--)];
-    if (support >= options.mode_min_support * n) {
+    if (support >= options.mode_min_support * n_used) {
       mode_first = j + 1;
       mode_last = i;
     }
@@ -195,7 +219,7 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   }
   if (mode_first < 0) {
     return NoMeasurement(result, fmt::format("no depth mode holds {:.0f} % of the {} valid pixels",
-                                             100.0 * options.mode_min_support, n));
+                                             100.0 * options.mode_min_support, n_used));
   }
   // Grow by one bin on each side: the valley test on the smoothed histogram cuts tails early.
   mode_first = std::max(1, mode_first - 1);

@@ -7,9 +7,9 @@
 // where d_near is a high percentile (RangingOptions::near_percentile) of the obstacle's
 // median-smoothed disparities.
 //
-// Stages: valid disparities in the working depth range -> log-disparity histogram -> depth modes
-// separated by valleys -> the nearest mode with enough support is the obstacle (what lies behind it
-// in the ROI is dropped)
+// Stages: valid disparities in the working depth range -> thin structures (the conductor) dropped
+// -> log-disparity histogram -> depth modes separated by valleys -> the nearest mode with enough
+// support is the obstacle (what lies behind it in the ROI is dropped)
 // -> local median smoothing -> near percentile -> sigma from the residuals.
 #pragma once
 
@@ -44,7 +44,11 @@ struct RangingOptions {
   double min_depth_m = 0.2;          // disparities of nearer points are ignored (m)
   double max_depth_m = 8.0;          // disparities of farther points are ignored (m)
   int min_valid_pixels = 20;         // fewer valid pixels in the ROI -> no measurement
-  double min_valid_fraction = 0.01;  // smaller share of valid pixels in the ROI -> no measurement
+  double min_valid_fraction = 0.10;  // smaller share of valid pixels in the ROI -> no measurement
+  // Before looking for depth modes, drop thin structures (conductors, cables): surfaces narrower
+  // than this (m, at their depth) in some direction. 0 disables. Falls back to all pixels if too
+  // few bodies remain.
+  double min_body_width_m = 0.045;
   double mode_bin_relative =
       0.01;  // histogram bin width in ln(d): 0.01 = bins 1 % of the disparity wide
   // A histogram bin belongs to a depth mode while its (smoothed) count exceeds this fraction of the

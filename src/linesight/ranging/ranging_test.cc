@@ -82,7 +82,8 @@ TEST(RangingTest, NoisefreeFlatTargetIsExact) {
   ASSERT_TRUE(r.ok()) << r.reason;
   EXPECT_NEAR(r.distance_m, 2.5, 1e-5);
   EXPECT_EQ(r.box, cv::Rect(100, 80, 60, 50));
-  EXPECT_EQ(r.obstacle_pixels, 60 * 50);
+  EXPECT_GE(r.obstacle_pixels,
+            60 * 50 - 20);  // the opening against thin structures rounds the corners
   EXPECT_NEAR(r.valid_fraction, 60.0 * 90 / (80 * 100),
               1e-12);  // obstacle and background are valid
   // Noise-free: sigma is the floor only.
@@ -107,6 +108,10 @@ TEST(RangingTest, SphereDistanceIsAccurateAndSigmaIsCalibrated) {
       ASSERT_TRUE(r.ok()) << r.reason;
       sum_error += (r.distance_m - distance) / distance;
       covered += std::abs(r.distance_m - distance) <= 2.0 * r.sigma_m;
+      if (std::getenv("LS_DEBUG"))
+        std::printf("%.2f: %.4f +- %.4f n %d box %d %d %d %d roi %d %d %d %d\n", distance,
+                    r.distance_m, r.sigma_m, r.obstacle_pixels, r.box.x, r.box.y, r.box.width,
+                    r.box.height, roi.x, roi.y, roi.width, roi.height);
     }
     EXPECT_LT(std::abs(sum_error / runs), 0.01) << "at " << distance << " m";
     EXPECT_GE(covered, int(0.85 * runs)) << "at " << distance << " m";

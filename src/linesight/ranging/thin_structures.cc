@@ -1,0 +1,99 @@
+#include "linesight/ranging/thin_structures.h"
+
+#include <cmath>
+
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+void ThinStructureOptions::Check() const {
+  CheckOption(min_width_m > 0.0, "ThinStructureOptions.min_width_m", min_width_m, "must be > 0");
+  CheckOption(depth_band_relative > 0.0 && depth_band_relative <= 0.5,
+              "ThinStructureOptions.depth_band_relative", depth_band_relative,
+              "must be in (0, 0.5]");
+  CheckOption(min_depth_m > 0.0, "ThinStructureOptions.min_depth_m", min_depth_m, "must be > 0");
+  CheckOption(max_depth_m > min_depth_m, "ThinStructureOptions.max_depth_m", max_depth_m,
+              "must exceed min_depth_m");
+}
+
+cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const cv::Rect& region,
+                 const ThinStructureOptions& options, bool seeds_only) {
+  options.Check();
+  LS_CHECK(disparity.type() == CV_32FC1);
+  const cv::Rect image(0, 0, disparity.cols, disparity.rows);
+  LS_CHECK((region & image) == region);
+  const double offset = geometry.disparity_offset_px;
+  const double d_low = geometry.DisparityFromDepth(options.max_depth_m);
+  const double d_high = geometry.DisparityFromDepth(options.min_depth_m);
+  const double log_low = std::log(d_low + offset);
+  const double band = options.depth_band_relative;
+  const int bands = int(std::ceil((std::log(d_high + offset) - log_low) / band)) + 1;
+  auto radius_of_band = [&](int k) {
+    const double d = std::exp(log_low + (k + 0.5) * band) - offset;
+    return 0.5 * options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d);
+  };
+  // Work on the region plus a margin as wide as the largest body radius that occurs in it.
+  double max_radius = 0.0;
+  const cv::Mat inner = disparity(region);
+  for (int y = 0; y < inner.rows; ++y) {
+    const float* d = inner.ptr<float>(y);
+    for (int x = 0; x < inner.cols; ++x) {
+      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) {
+        max_radius =
+            std::max(max_radius, 0.5 * options.min_width_m * (d[x] + offset) / geometry.baseline_m);
+      }
+    }
+  }
+  const int margin = int(std::ceil(max_radius)) + 2;
+  const cv::Rect outer =
+      (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
+  const cv::Mat view = disparity(outer);
+  cv::Mat band_of(view.size(), CV_32S, cv::Scalar(-1));
+  std::vector<int> present(size_t(bands), 0);
+  for (int y = 0; y < view.rows; ++y) {
+    const float* d = view.ptr<float>(y);
+    int* b = band_of.ptr<int>(y);
+    for (int x = 0; x < view.cols; ++x) {
+      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) {
+        b[x] = std::clamp(int((std::log(d[x] + offset) - log_low) / band), 0, bands - 1);
+        present[size_t(b[x])] = 1;
+      }
+    }
+  }
+  cv::Mat body(view.size(), CV_8U, cv::Scalar(0));
+  cv::Mat surface, padded, distance, seeds, grown;
+  for (int k = 0; k < bands; ++k) {
+    if (!present[size_t(k)]) continue;
+    cv::inRange(band_of, k - 1, k + 1, surface);
+    // Matching leaves small holes inside bodies; a hole must not make a body look thin. Closing
+    // with a disc of the body radius fills holes narrower than that radius without widening a
+    // conductor.
+    const int close = std::max(3, int(std::round(radius_of_band(k))) | 1);
+    cv::morphologyEx(surface, surface, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_ELLIPSE, {close, close}));
+    // The image border is not a surface edge: it clips bodies, it does not make them thin.
+    const bool at_border =
+        outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
+    const int pad = at_border ? int(std::ceil(radius_of_band(k))) + 1 : 0;
+    cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
+    cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
+    const double radius = radius_of_band(k);
+    cv::Mat in_band = band_of == k;
+    seeds = (distance(cv::Rect(pad, pad, view.cols, view.rows)) >= radius) & in_band;
+    if (cv::countNonZero(seeds) == 0) continue;
+    if (seeds_only) {
+      body |= seeds;
+      continue;
+    }
+    const int r = int(std::ceil(radius));
+    cv::dilate(seeds, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
+    body |= grown & surface;
+  }
+  return body(cv::Rect(region.x - outer.x, region.y - outer.y, region.width, region.height))
+      .clone();
+}
+
+}  // namespace linesight

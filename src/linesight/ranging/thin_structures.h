@@ -1,0 +1,31 @@
+// Thin structures (conductors, cables) versus bodies (obstacles) in a disparity map. A pixel lies
+// on a body if the surface of similar depth around it is at least `min_width_m` wide (in metres at
+// that depth) in every direction, or if it is within that half-width of such a pixel on the same
+// surface (a morphological opening per depth band). Conductors (~27 mm) fall out with min_width_m ~
+// 45 mm; damper weights, clamps and insulator sheds stay.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include "linesight/geometry/depth.h"
+
+namespace linesight {
+
+struct ThinStructureOptions {
+  double min_width_m = 0.045;  // narrower surfaces are thin (m)
+  double depth_band_relative =
+      0.04;                  // width of a depth band in ln(d); a surface spans 3 neighbouring bands
+  double min_depth_m = 0.2;  // pixels outside the depth range are ignored (m)
+  double max_depth_m = 8.0;
+
+  void Check() const;
+};
+
+// Returns (CV_8U, 255 = on a body) for `region` of the disparity; the pixels around `region` are
+// looked at too, so that the region's border does not cut a body. With `seeds_only` the result
+// holds only the pixels deep inside a body (before growing back), which is what automatic obstacle
+// finding starts from.
+cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const cv::Rect& region,
+                 const ThinStructureOptions& options, bool seeds_only = false);
+
+}  // namespace linesight
