@@ -211,12 +211,14 @@ std::vector<StudyRow> RunCalibrationStudy(const CalibrationStudyOptions& options
       const auto bound = CramerRaoStddev(rig, poses, point.noise, options.distortion);
       for (int i = 0; i < kStudyParameterCount; ++i) bound_variance_sum[i] += bound[i] * bound[i];
       {
-        // Expected residual RMS of the maximum-likelihood fit: σ·sqrt(1 − n/m).
+        // Expected per-point residual RMS of the maximum-likelihood fit (same definition as
+        // StereoRms): σ·√2·sqrt(1 − n/m).
         const int m = 2 * 2 * static_cast<int>(rig.board.points.size()) * point.images;
         const int free_intrinsics =
             2 * (kNumIntrinsics - static_cast<int>(options.distortion.FixedIndices().size()));
         const int n = free_intrinsics + kPoseSize + kPoseSize * point.images;
-        bound_dof_sum += point.noise * std::sqrt(std::max(0.0, 1.0 - static_cast<double>(n) / m));
+        bound_dof_sum += point.noise * std::sqrt(2.0) *
+                         std::sqrt(std::max(0.0, 1.0 - static_cast<double>(n) / m));
       }
       for (CalibrationMethod method : options.methods) {
         StereoCalibrationOptions calibration = options.calibration;
