@@ -139,13 +139,15 @@ int RunRender(int argc, char** argv) {
       sim::WriteCalibrationBoards(dir / "boards", set);
     }
 
-    std::printf("%-3s %-10s %12s %10s %22s %8s\n", "id", "type", "distance_m", "requested",
-                "box (x,y,w,h)", "pixels");
+    // The table goes to stdout unless the JSON report does.
+    std::FILE* table = json_path == "-" ? stderr : stdout;
+    std::fprintf(table, "%-3s %-10s %12s %10s %22s %8s\n", "id", "type", "distance_m", "requested",
+                 "box (x,y,w,h)", "pixels");
     for (const sim::RenderedObstacle& o : scene.obstacles) {
-      std::printf("%-3d %-10s %12.6f %10.3f %22s %8d\n", o.id,
-                  sim::ObstacleTypeName(o.type).c_str(), o.distance_m, o.requested_distance_m,
-                  fmt::format("{},{},{},{}", o.box.x, o.box.y, o.box.width, o.box.height).c_str(),
-                  o.visible_pixels);
+      std::fprintf(table, "%-3d %-10s %12.6f %10.3f %22s %8d\n", o.id,
+                   sim::ObstacleTypeName(o.type).c_str(), o.distance_m, o.requested_distance_m,
+                   fmt::format("{},{},{},{}", o.box.x, o.box.y, o.box.width, o.box.height).c_str(),
+                   o.visible_pixels);
     }
     std::fprintf(stderr, "render: scene %.0f ms%s, written to %s\n", scene_ms,
                  want_boards
