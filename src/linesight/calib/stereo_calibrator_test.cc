@@ -112,6 +112,31 @@ TEST(CalibrateStereo, NoisyEstimateIsConsistentWithTheCramerRaoBound) {
   }
 }
 
+// Views where only one camera saw the board still serve that camera's intrinsics.
+TEST(CalibrateStereo, UsesSingleCameraViews) {
+  const SimulationRig rig = DefaultSimulationRig();
+  std::mt19937_64 rng(9);
+  const auto poses = RandomBoardPoses(rig, 8, BoardPoseOptions(), rng);
+  StereoObservations obs = SynthesizeObservations(rig, poses, 0.0, rng);
+  obs.right[0] = {};
+  obs.right[1] = {};
+  obs.left[2] = {};
+  for (auto method :
+       {CalibrationMethod::kZhang, CalibrationMethod::kRecon, CalibrationMethod::kOpenCV}) {
+    SCOPED_TRACE(MethodName(method));
+    const StereoCalibrationResult r = CalibrateStereo(obs, Options(method));
+    EXPECT_TRUE(r.left_from_board[0].has_value());
+    EXPECT_FALSE(r.left_from_board[2].has_value());
+    EXPECT_TRUE(r.right_only_from_board[2].has_value());
+    EXPECT_NEAR(r.right.fx(), rig.right.fx(), 1e-3);
+    EXPECT_NEAR(r.left.cx(), rig.left.cx(), 1e-3);
+    const CalibrationReport report = EvaluateCalibration(obs, r);
+    EXPECT_TRUE(std::isnan(report.right_view_rms_px[0]));
+    EXPECT_TRUE(std::isnan(report.left_view_rms_px[2]));
+    EXPECT_LT(report.right_view_rms_px[2], 1e-4);
+  }
+}
+
 TEST(CalibrateStereo, RejectsBadInput) {
   const SimulationRig rig = DefaultSimulationRig();
   std::mt19937_64 rng(5);
