@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string_view>
+#include <system_error>
 
 #include <fmt/format.h>
 
@@ -190,7 +191,13 @@ std::string EncodePfm(const cv::Mat& image) {
   return out;
 }
 
-cv::Mat ReadPfm(const fs::path& path) { return DecodePfm(ReadTextFile(path), path.string()); }
+cv::Mat ReadPfm(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    throw InputError(fmt::format("{}: is a folder, expected a PFM file", path.string()));
+  }
+  return DecodePfm(ReadTextFile(path), path.string());
+}
 
 void WritePfm(const fs::path& path, const cv::Mat& image) {
   const std::string bytes = EncodePfm(image);  // validates before anything is written

@@ -159,6 +159,7 @@ TEST_F(PfmTest, MalformedHeadersGiveClearErrors) {
 
 TEST_F(PfmTest, FileErrorsNameTheFileAndLeaveNoOutput) {
   ExpectInputError([&] { ReadPfm(dir_ / "missing.pfm"); }, {"missing.pfm", "no such file"});
+  ExpectInputError([&] { ReadPfm(dir_); }, {dir_.string(), "is a folder"});
   WriteTextAtomic(dir_ / "cut.pfm", "Pf\n4 4\n-1\n" + std::string(10, '\0'));
   ExpectInputError([&] { ReadPfm(dir_ / "cut.pfm"); },
                    {"cut.pfm", "truncated", "64 bytes", "has 10"});

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 
 #include <fmt/format.h>
 #include <opencv2/core/persistence.hpp>
@@ -228,6 +229,11 @@ std::string EncodeStereoCalibration(const StereoCalibration& calib) {
 }
 
 StereoCalibration ReadStereoCalibration(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    throw InputError(
+        fmt::format("{}: is a folder, expected a stereo calibration YAML file", path.string()));
+  }
   return DecodeStereoCalibration(ReadTextFile(path), path.string());
 }
 

@@ -198,6 +198,7 @@ TEST_F(StereoCalibrationTest, HandEditedMistakesAreNamed) {
 TEST_F(StereoCalibrationTest, UnparseableFilesAreInputErrorsNamingTheFile) {
   ExpectInputError([&] { ReadStereoCalibration(dir_ / "missing.yml"); },
                    {"missing.yml", "no such file"});
+  ExpectInputError([&] { ReadStereoCalibration(dir_); }, {dir_.string(), "is a folder"});
   for (const std::string& text :
        {std::string(""), std::string("  \n"), std::string("%YAML:1.0\nM1: [1, 2\n"),
         std::string("%YAML:1.0\n  a: 1\n b: {\n"), std::string("just some text"),
