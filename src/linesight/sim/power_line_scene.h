@@ -296,10 +296,16 @@ struct ChessboardOptions {
   std::vector<cv::Point3f> ObjectPoints() const;
 };
 
+// Sensor defaults for boards: finer anti-aliasing than the scene (corners are sub-pixel targets).
+inline SensorOptions BoardSensorDefaults() {
+  SensorOptions sensor;
+  sensor.supersampling = 4;
+  return sensor;
+}
+
 struct CalibrationBoardOptions {
   StereoRigOptions rig;
-  // Finer anti-aliasing than the scene: chessboard corners are sub-pixel targets.
-  SensorOptions sensor{.supersampling = 4};
+  SensorOptions sensor = BoardSensorDefaults();
   ChessboardOptions board;
   std::uint64_t seed = 1;
   // Boards fully visible (with the border and margin_px) in both cameras.
