@@ -1,13 +1,19 @@
 #include "linesight/sim/power_line_scene.h"
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <random>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/io/image_io.h"
+#include "linesight/io/json_io.h"
 #include "linesight/io/pfm.h"
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/sim/sim_internal.h"
@@ -391,6 +397,31 @@ TEST(RenderPowerLineScene, IdealRectifiedPairMatchesTheGroundTruthDisparity) {
   }
   ASSERT_GT(compared, 50);
   EXPECT_GT(agree, 0.85 * compared);
+}
+
+TEST_F(RenderedSmallScene, WritesEveryOutputReadably) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / fmt::format("linesight_sim_test_{}", ::getpid());
+  std::filesystem::remove_all(dir);
+  WritePowerLineScene(dir / "scene", *scene_);
+  const PowerLineScene& s = *scene_;
+  const cv::Mat disparity = ReadPfm(dir / "scene" / "disparity_gt.pfm");
+  EXPECT_EQ(cv::norm(disparity != s.disparity, cv::NORM_INF), 0.0);  // +inf survives
+  const cv::Mat depth = ReadPfm(dir / "scene" / "depth_gt.pfm");
+  EXPECT_EQ(cv::norm(depth != s.depth, cv::NORM_INF), 0.0);
+  const StereoCalibration calib = ReadStereoCalibration(dir / "scene" / "stereo.yml");
+  EXPECT_LT(cv::norm(calib.P2, s.calibration.P2), 1e-9);
+  EXPECT_LT(cv::norm(calib.R1, s.calibration.R1), 1e-12);
+  const cv::Mat left = ReadImage(dir / "scene" / "left.png", ImageColor::kColor);
+  EXPECT_EQ(cv::norm(left, s.left, cv::NORM_INF), 0.0);
+  const cv::Mat mask = ReadImage(dir / "scene" / "obstacle_mask.png", ImageColor::kGray);
+  EXPECT_EQ(cv::norm(mask, s.obstacle_mask, cv::NORM_INF), 0.0);
+  const nlohmann::json json = ReadJson(dir / "scene" / "obstacles.json");
+  ASSERT_EQ(json["obstacles"].size(), s.obstacles.size());
+  EXPECT_EQ(json["obstacles"][0]["type"], "damper");
+  EXPECT_DOUBLE_EQ(json["obstacles"][0]["distance_m"].get<double>(), s.obstacles[0].distance_m);
+  EXPECT_FALSE(std::filesystem::exists(dir / "scene" / "rectified_left.png"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(RenderPowerLineScene, RejectsAnObstacleThatCannotBeSeen) {
