@@ -35,24 +35,27 @@ int EffectiveThreads(int requested) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-int32_t ToCostUnits(double value) { return static_cast<int32_t>(std::lround(value * kGraphCutCostScale)); }
+int32_t ToCostUnits(double value) {
+  return static_cast<int32_t>(std::lround(value * kGraphCutCostScale));
+}
 
 }  // namespace
 
 void GraphCutOptions::Check() const {
-  CheckOption(num_disparities >= 1 && num_disparities <= 1024, "GraphCutOptions.num_disparities", num_disparities,
-              "must be in [1, 1024]");
-  CheckOption(min_disparity > -4096 && min_disparity < 4096, "GraphCutOptions.min_disparity", min_disparity,
-              "must be in (-4096, 4096)");
+  CheckOption(num_disparities >= 1 && num_disparities <= 1024, "GraphCutOptions.num_disparities",
+              num_disparities, "must be in [1, 1024]");
+  CheckOption(min_disparity > -4096 && min_disparity < 4096, "GraphCutOptions.min_disparity",
+              min_disparity, "must be in (-4096, 4096)");
   CheckOption(threads >= 0, "GraphCutOptions.threads", threads, "must be >= 0 (0 = all cores)");
-  CheckOption(census_window >= 3 && census_window <= 7 && census_window % 2 == 1, "GraphCutOptions.census_window",
-              census_window, "must be odd and in [3, 7]");
-  CheckOption(std::isfinite(truncation) && truncation > 0 && truncation <= 1000, "GraphCutOptions.truncation",
-              truncation, "must be in (0, 1000] (grey levels for bt, bits for census)");
-  CheckOption(std::isfinite(lambda) && lambda >= 0 && lambda <= 10000, "GraphCutOptions.lambda", lambda,
-              "must be in [0, 10000]");
-  CheckOption(edge_threshold >= 0 && edge_threshold <= 256, "GraphCutOptions.edge_threshold", edge_threshold,
-              "must be in [0, 256] grey levels (0 = no intensity adaptation)");
+  CheckOption(census_window >= 3 && census_window <= 7 && census_window % 2 == 1,
+              "GraphCutOptions.census_window", census_window, "must be odd and in [3, 7]");
+  CheckOption(std::isfinite(truncation) && truncation > 0 && truncation <= 1000,
+              "GraphCutOptions.truncation", truncation,
+              "must be in (0, 1000] (grey levels for bt, bits for census)");
+  CheckOption(std::isfinite(lambda) && lambda >= 0 && lambda <= 10000, "GraphCutOptions.lambda",
+              lambda, "must be in [0, 10000]");
+  CheckOption(edge_threshold >= 0 && edge_threshold <= 256, "GraphCutOptions.edge_threshold",
+              edge_threshold, "must be in [0, 256] grey levels (0 = no intensity adaptation)");
   CheckOption(std::isfinite(edge_multiplier) && edge_multiplier >= 1 && edge_multiplier <= 100,
               "GraphCutOptions.edge_multiplier", edge_multiplier, "must be in [1, 100]");
   CheckOption(iterations >= 1 && iterations <= 100, "GraphCutOptions.iterations", iterations,
@@ -85,7 +88,8 @@ int64_t PottsEnergy(int width, int height, const std::vector<int32_t>& weight_ri
                     const std::vector<int32_t>& weight_down, const std::vector<int32_t>& labels,
                     const std::vector<int32_t>& data_costs) {
   const size_t n = static_cast<size_t>(width) * height;
-  LS_CHECK(weight_right.size() == n && weight_down.size() == n && labels.size() == n && data_costs.size() == n);
+  LS_CHECK(weight_right.size() == n && weight_down.size() == n && labels.size() == n &&
+           data_costs.size() == n);
   int64_t energy = 0;
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -98,11 +102,13 @@ int64_t PottsEnergy(int width, int height, const std::vector<int32_t>& weight_ri
   return energy;
 }
 
-// Flat graph for Boost's Boykov–Kolmogorov solver: pixels 0..n-1, source n, sink n+1. Every edge has its reverse
-// edge (Boost's residual graph needs it). Per pixel p the out-edges are p→sink, p→source, then p's grid edges.
+// Flat graph for Boost's Boykov–Kolmogorov solver: pixels 0..n-1, source n, sink n+1. Every edge
+// has its reverse edge (Boost's residual graph needs it). Per pixel p the out-edges are p→sink,
+// p→source, then p's grid edges.
 using CapacityType = int64_t;  // the total flow of a large image exceeds int32
-using CsrGraph = boost::compressed_sparse_row_graph<boost::directedS, boost::no_property, boost::no_property,
-                                                    boost::no_property, uint32_t, uint32_t>;
+using CsrGraph =
+    boost::compressed_sparse_row_graph<boost::directedS, boost::no_property, boost::no_property,
+                                       boost::no_property, uint32_t, uint32_t>;
 using GraphEdge = boost::graph_traits<CsrGraph>::edge_descriptor;
 
 struct PottsExpansion::Graph {
@@ -215,15 +221,18 @@ int PottsExpansion::Expand(int32_t alpha, const int32_t* alpha_costs) {
   const int n = width_ * height_;
   LS_CHECK(static_cast<int>(labels_.size()) == n);
   std::fill(g.capacity.begin(), g.capacity.end(), 0);
-  // Binary variable per pixel: x_p = 0 keeps labels_[p] (source side), x_p = 1 takes alpha (sink side).
-  // Pixels already labelled alpha do not change; their pairwise terms become unary terms of their neighbours.
+  // Binary variable per pixel: x_p = 0 keeps labels_[p] (source side), x_p = 1 takes alpha (sink
+  // side). Pixels already labelled alpha do not change; their pairwise terms become unary terms of
+  // their neighbours.
   for (int p = 0; p < n; ++p) {
     g.keep_cost[p] = data_costs_[p];
     g.switch_cost[p] = alpha_costs[p];
   }
-  // Kolmogorov–Zabih construction of one Potts pair term w·[f_p ≠ f_q] of the move (p, q both free):
+  // Kolmogorov–Zabih construction of one Potts pair term w·[f_p ≠ f_q] of the move (p, q both
+  // free):
   //   f_p == f_q: E(0,0) = 0, E(0,1) = E(1,0) = w, E(1,1) = 0 → edges p→q and q→p of capacity w;
-  //   f_p != f_q: E(0,0) = E(0,1) = E(1,0) = w, E(1,1) = 0   → edge p→q of capacity w + w on "q keeps".
+  //   f_p != f_q: E(0,0) = E(0,1) = E(1,0) = w, E(1,1) = 0   → edge p→q of capacity w + w on "q
+  //   keeps".
   auto pair_term = [&](int p, int q, int32_t w, uint32_t forward, uint32_t backward) {
     if (w == 0) return;
     const bool p_fixed = labels_[p] == alpha;
@@ -251,8 +260,9 @@ int PottsExpansion::Expand(int32_t alpha, const int32_t* alpha_costs) {
   for (int p = 0; p < n; ++p) {
     if (labels_[p] == alpha) continue;
     const int64_t common = std::min(g.keep_cost[p], g.switch_cost[p]);
-    g.capacity[g.from_source[p]] = g.switch_cost[p] - common;  // cut when p is on the sink side (takes alpha)
-    g.capacity[g.to_sink[p]] = g.keep_cost[p] - common;        // cut when p is on the source side (keeps)
+    g.capacity[g.from_source[p]] =
+        g.switch_cost[p] - common;  // cut when p is on the sink side (takes alpha)
+    g.capacity[g.to_sink[p]] = g.keep_cost[p] - common;  // cut when p is on the source side (keeps)
   }
 
   const auto edge_index = get(boost::edge_index, g.graph);
@@ -263,10 +273,12 @@ int PottsExpansion::Expand(int32_t alpha, const int32_t* alpha_costs) {
       boost::make_iterator_property_map(g.reverse.begin(), edge_index),
       boost::make_iterator_property_map(g.predecessor.begin(), vertex_index),
       boost::make_iterator_property_map(g.color.begin(), vertex_index),
-      boost::make_iterator_property_map(g.distance.begin(), vertex_index), vertex_index, g.source, g.sink);
+      boost::make_iterator_property_map(g.distance.begin(), vertex_index), vertex_index, g.source,
+      g.sink);
 
-  // At termination the source search tree (black) is exactly the set reachable from the source in the residual
-  // graph, so (black, rest) is a minimum cut: black pixels keep their label, all others take alpha.
+  // At termination the source search tree (black) is exactly the set reachable from the source in
+  // the residual graph, so (black, rest) is a minimum cut: black pixels keep their label, all
+  // others take alpha.
   int switched = 0;
   for (int p = 0; p < n; ++p) {
     if (labels_[p] == alpha || g.color[p] == boost::black_color) continue;
@@ -281,7 +293,8 @@ int PottsExpansion::Expand(int32_t alpha, const int32_t* alpha_costs) {
 
 namespace {
 
-// The images the data and smoothness terms look at: 1 or 3 channels of 8 bits, same size and channel count.
+// The images the data and smoothness terms look at: 1 or 3 channels of 8 bits, same size and
+// channel count.
 struct MatchingImages {
   cv::Mat left;
   cv::Mat right;
@@ -294,14 +307,16 @@ cv::Mat ToColor8(const cv::Mat& image) {
   return bgr;
 }
 
-MatchingImages PrepareImages(const cv::Mat& left, const cv::Mat& right, const GraphCutOptions& options) {
+MatchingImages PrepareImages(const cv::Mat& left, const cv::Mat& right,
+                             const GraphCutOptions& options) {
   if (left.empty() || right.empty()) throw InputError("gc: empty input image");
   if (left.size() != right.size()) {
-    throw InputError(fmt::format("gc: left ({}x{}) and right ({}x{}) images differ in size", left.cols, left.rows,
-                                 right.cols, right.rows));
+    throw InputError(fmt::format("gc: left ({}x{}) and right ({}x{}) images differ in size",
+                                 left.cols, left.rows, right.cols, right.rows));
   }
   const bool color = options.use_color && left.channels() >= 3 && right.channels() >= 3;
-  if (color && left.depth() == CV_8U && right.depth() == CV_8U) return {ToColor8(left), ToColor8(right)};
+  if (color && left.depth() == CV_8U && right.depth() == CV_8U)
+    return {ToColor8(left), ToColor8(right)};
   return {ToGray8(left), ToGray8(right)};
 }
 
@@ -330,8 +345,9 @@ class StereoDataCost {
   void Slice(int d, int32_t* out) const {
     for (int y = 0; y < height_; ++y) {
       int32_t* row = out + static_cast<size_t>(y) * width_;
-      const int x_begin = std::clamp(d, 0, width_);       // first x with x - d >= 0
-      const int x_end = std::clamp(width_ + d, 0, width_);  // one past the last x with x - d < width
+      const int x_begin = std::clamp(d, 0, width_);  // first x with x - d >= 0
+      const int x_end =
+          std::clamp(width_ + d, 0, width_);  // one past the last x with x - d < width
       std::fill(row, row + x_begin, truncation_);
       std::fill(row + std::max(x_begin, x_end), row + width_, truncation_);
       if (census_) {
@@ -344,7 +360,8 @@ class StereoDataCost {
         const size_t offset = static_cast<size_t>(y) * width_ * channels_;
         const Bt& l = left_;
         const Bt& r = right_;
-        // Units: each channel contributes 2·BT_c; 3 channels sum to 6·mean BT, one channel is scaled by 3.
+        // Units: each channel contributes 2·BT_c; 3 channels sum to 6·mean BT, one channel is
+        // scaled by 3.
         const int scale = channels_ == 1 ? 3 : 1;
         for (int x = x_begin; x < x_end; ++x) {
           int sum = 0;
@@ -388,7 +405,8 @@ class StereoDataCost {
     }
   }
 
-  // Census codes (bit set where a window pixel is darker than the centre), border pixels replicated.
+  // Census codes (bit set where a window pixel is darker than the centre), border pixels
+  // replicated.
   std::vector<uint64_t> Census(const cv::Mat& gray, int window) const {
     std::vector<uint64_t> codes(static_cast<size_t>(width_) * height_);
     const int r = window / 2;
@@ -418,9 +436,10 @@ class StereoDataCost {
   std::vector<uint64_t> left_census_, right_census_;
 };
 
-// Intensity-adaptive Potts weights of the left image: λ·edge_multiplier between similar neighbours, else λ.
-void SmoothnessWeights(const cv::Mat& image, const GraphCutOptions& options, std::vector<int32_t>& weight_right,
-                       std::vector<int32_t>& weight_down) {
+// Intensity-adaptive Potts weights of the left image: λ·edge_multiplier between similar neighbours,
+// else λ.
+void SmoothnessWeights(const cv::Mat& image, const GraphCutOptions& options,
+                       std::vector<int32_t>& weight_right, std::vector<int32_t>& weight_down) {
   const int width = image.cols, height = image.rows, channels = image.channels();
   const int32_t across_edge = ToCostUnits(options.lambda);
   const int32_t similar = ToCostUnits(options.lambda * options.edge_multiplier);
@@ -438,10 +457,12 @@ void SmoothnessWeights(const cv::Mat& image, const GraphCutOptions& options, std
       const size_t p = static_cast<size_t>(y) * width + x;
       const uint8_t* here = row + x * channels;
       if (x + 1 < width) {
-        weight_right[p] = difference(here, here + channels) < options.edge_threshold ? similar : across_edge;
+        weight_right[p] =
+            difference(here, here + channels) < options.edge_threshold ? similar : across_edge;
       }
       if (below) {
-        weight_down[p] = difference(here, below + x * channels) < options.edge_threshold ? similar : across_edge;
+        weight_down[p] =
+            difference(here, below + x * channels) < options.edge_threshold ? similar : across_edge;
       }
     }
   }
@@ -461,7 +482,8 @@ ViewSolution SolveView(const MatchingImages& images, const GraphCutOptions& opti
   ViewSolution solution;
   solution.disparity = cv::Mat(height, width, CV_32FC1, cv::Scalar(kInvalidDisparity));
 
-  // Labels whose disparity leaves some pixel a match inside the right image; the others are never used.
+  // Labels whose disparity leaves some pixel a match inside the right image; the others are never
+  // used.
   std::vector<int32_t> labels;
   for (int label = 0; label < options.num_disparities; ++label) {
     const int d = options.min_disparity + label;
@@ -491,15 +513,16 @@ ViewSolution SolveView(const MatchingImages& images, const GraphCutOptions& opti
   expansion.SetLabeling(std::move(start_labels), std::move(start_costs));
   solution.energy_per_cycle.push_back(expansion.Energy());
 
-  // A move of alpha from the labelling its last move produced cannot lower the energy, so it is skipped while no
-  // other move has changed a pixel since.
+  // A move of alpha from the labelling its last move produced cannot lower the energy, so it is
+  // skipped while no other move has changed a pixel since.
   int64_t total_switched = 0;
   std::vector<int64_t> switched_at_last_move(options.num_disparities, -1);
   std::mt19937_64 random(options.seed);
   std::vector<int32_t> order = labels;
   for (int cycle = 0; cycle < options.iterations; ++cycle) {
     if (options.label_order == GraphCutLabelOrder::kRandom) {
-      // Fisher–Yates with an explicit index draw, so the order is the same with every standard library.
+      // Fisher–Yates with an explicit index draw, so the order is the same with every standard
+      // library.
       for (size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[random() % i]);
     }
     for (int32_t alpha : order) {
@@ -511,21 +534,26 @@ ViewSolution SolveView(const MatchingImages& images, const GraphCutOptions& opti
     }
     ++solution.cycles;
     solution.energy_per_cycle.push_back(expansion.Energy());
-    if (solution.energy_per_cycle.back() >= solution.energy_per_cycle[solution.energy_per_cycle.size() - 2]) break;
+    if (solution.energy_per_cycle.back() >=
+        solution.energy_per_cycle[solution.energy_per_cycle.size() - 2])
+      break;
   }
 
   const std::vector<int32_t>& result = expansion.labels();
   for (int y = 0; y < height; ++y) {
     float* row = solution.disparity.ptr<float>(y);
     for (int x = 0; x < width; ++x) {
-      row[x] = static_cast<float>(options.min_disparity + result[static_cast<size_t>(y) * width + x]);
+      row[x] =
+          static_cast<float>(options.min_disparity + result[static_cast<size_t>(y) * width + x]);
     }
   }
   return solution;
 }
 
-// Left-right check: a left pixel survives when the right view, at the pixel it points to, agrees within max_diff.
-cv::Mat LeftRightCheck(const cv::Mat& left_disparity, const cv::Mat& right_disparity, int max_diff) {
+// Left-right check: a left pixel survives when the right view, at the pixel it points to, agrees
+// within max_diff.
+cv::Mat LeftRightCheck(const cv::Mat& left_disparity, const cv::Mat& right_disparity,
+                       int max_diff) {
   cv::Mat checked = left_disparity.clone();
   const int width = left_disparity.cols;
   for (int y = 0; y < left_disparity.rows; ++y) {
@@ -543,7 +571,8 @@ cv::Mat LeftRightCheck(const cv::Mat& left_disparity, const cv::Mat& right_dispa
   return checked;
 }
 
-// Occluded pixels belong to the farther surface: take the smaller of the nearest valid disparities on the row.
+// Occluded pixels belong to the farther surface: take the smaller of the nearest valid disparities
+// on the row.
 void FillFromBackground(cv::Mat& disparity) {
   const int width = disparity.cols;
   std::vector<float> from_left(width);
@@ -567,7 +596,9 @@ void FillFromBackground(cv::Mat& disparity) {
 
 }  // namespace
 
-GraphCutMatcher::GraphCutMatcher(const GraphCutOptions& options) : options_(options) { options_.Check(); }
+GraphCutMatcher::GraphCutMatcher(const GraphCutOptions& options) : options_(options) {
+  options_.Check();
+}
 
 GraphCutMatcher::~GraphCutMatcher() = default;
 
@@ -588,7 +619,8 @@ GraphCutResult GraphCutMatcher::ComputeDetailed(const cv::Mat& left, const cv::M
 
   ViewSolution left_view, right_view;
   if (options_.lr_check) {
-    // The right view is the left view of the mirrored pair (flip(right), flip(left)) with the same range.
+    // The right view is the left view of the mirrored pair (flip(right), flip(left)) with the same
+    // range.
     MatchingImages mirrored;
     cv::flip(images.right, mirrored.left, 1);
     cv::flip(images.left, mirrored.right, 1);
@@ -614,7 +646,8 @@ GraphCutResult GraphCutMatcher::ComputeDetailed(const cv::Mat& left, const cv::M
   result.expansion_moves = left_view.expansion_moves;
   if (options_.lr_check) {
     result.right_disparity = right_view.disparity;
-    result.disparity = LeftRightCheck(left_view.disparity, right_view.disparity, options_.lr_max_diff);
+    result.disparity =
+        LeftRightCheck(left_view.disparity, right_view.disparity, options_.lr_max_diff);
     if (options_.fill_occlusions) FillFromBackground(result.disparity);
   } else {
     result.disparity = left_view.disparity.clone();
@@ -628,8 +661,9 @@ GraphCutOptions ReadGraphCutOptions(const MatcherOptions& options, MatcherParams
   gc.min_disparity = options.min_disparity;
   gc.num_disparities = options.num_disparities;
   gc.threads = options.threads;
-  gc.data_term = params.GetString("data", "bt", {"bt", "census"}) == "census" ? GraphCutDataTerm::kCensus
-                                                                              : GraphCutDataTerm::kBirchfieldTomasi;
+  gc.data_term = params.GetString("data", "bt", {"bt", "census"}) == "census"
+                     ? GraphCutDataTerm::kCensus
+                     : GraphCutDataTerm::kBirchfieldTomasi;
   gc.use_color = params.GetBool("color", gc.use_color);
   gc.census_window = params.GetInt("census_window", gc.census_window);
   gc.truncation = params.GetDouble("truncation", gc.truncation);
@@ -650,7 +684,8 @@ GraphCutOptions ReadGraphCutOptions(const MatcherOptions& options, MatcherParams
   return gc;
 }
 
-std::unique_ptr<StereoMatcher> CreateGraphCutMatcher(const MatcherOptions& options, MatcherParams& params) {
+std::unique_ptr<StereoMatcher> CreateGraphCutMatcher(const MatcherOptions& options,
+                                                     MatcherParams& params) {
   return std::make_unique<GraphCutMatcher>(ReadGraphCutOptions(options, params));
 }
 

@@ -18,7 +18,7 @@
 namespace linesight {
 namespace {
 
-// ---------------------------------------------------------------------------------------------------------------
+// ------------------------------------------------------------------------------------------------
 // Options
 
 TEST(GraphCutOptionsTest, DefaultsAreValid) { EXPECT_NO_THROW(GraphCutOptions{}.Check()); }
@@ -36,7 +36,8 @@ void ExpectInvalid(const std::function<void(GraphCutOptions&)>& change, const st
     options.Check();
     ADD_FAILURE() << "no OptionError for " << field;
   } catch (const OptionError& error) {
-    EXPECT_NE(std::string(error.what()).find("GraphCutOptions." + field), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("GraphCutOptions." + field), std::string::npos)
+        << error.what();
   }
 }
 
@@ -77,7 +78,8 @@ TEST(GraphCutOptionsTest, FactoryReadsParamsAndRejectsUnknownKeys) {
   MatcherOptions options;
   options.min_disparity = 2;
   options.num_disparities = 20;
-  options.params = {{"data", "census"}, {"lambda", "7.5"}, {"order", "sequential"}, {"lr_check", "true"}};
+  options.params = {
+      {"data", "census"}, {"lambda", "7.5"}, {"order", "sequential"}, {"lr_check", "true"}};
   auto matcher = CreateMatcher("gc", options);
   ASSERT_EQ(matcher->Name(), "gc");
   const nlohmann::json settings = matcher->Settings();
@@ -96,7 +98,7 @@ TEST(GraphCutOptionsTest, FactoryReadsParamsAndRejectsUnknownKeys) {
   EXPECT_THROW(CreateMatcher("gc", options), UsageError);
 }
 
-// ---------------------------------------------------------------------------------------------------------------
+// ------------------------------------------------------------------------------------------------
 // α-expansion against brute force
 
 struct TinyPotts {
@@ -151,7 +153,8 @@ TEST(PottsExpansionTest, EveryMoveIsTheOptimalExpansionOnTinyGrids) {
     std::vector<int32_t> labels(potts.width * potts.height);
     for (auto& l : labels) l = label(random);
     // One solver for the whole sequence: the graph is reused and only its capacities change.
-    detail::PottsExpansion expansion(potts.width, potts.height, potts.weight_right, potts.weight_down);
+    detail::PottsExpansion expansion(potts.width, potts.height, potts.weight_right,
+                                     potts.weight_down);
     expansion.SetLabeling(labels, potts.Costs(labels));
     for (int move = 0; move < 2 * potts.num_labels; ++move) {
       const int alpha = label(random);
@@ -159,7 +162,8 @@ TEST(PottsExpansionTest, EveryMoveIsTheOptimalExpansionOnTinyGrids) {
       const int64_t best = potts.BestExpansionEnergy(expansion.labels(), alpha);
       const std::vector<int32_t> slice = potts.Slice(alpha);
       expansion.Expand(alpha, slice.data());
-      ASSERT_EQ(expansion.Energy(), best) << "trial " << trial << " move " << move << " alpha " << alpha;
+      ASSERT_EQ(expansion.Energy(), best)
+          << "trial " << trial << " move " << move << " alpha " << alpha;
       EXPECT_LE(expansion.Energy(), before);
       // The solver's bookkeeping of data costs matches the labels.
       EXPECT_EQ(expansion.data_costs(), potts.Costs(expansion.labels()));
@@ -172,7 +176,8 @@ TEST(PottsExpansionTest, EnergyNeverIncreasesAndConvergesToALocalMinimum) {
   std::mt19937 random(7);
   TinyPotts potts = RandomPotts(13, 9, 6, random);
   std::vector<int32_t> labels(potts.width * potts.height, 0);
-  detail::PottsExpansion expansion(potts.width, potts.height, potts.weight_right, potts.weight_down);
+  detail::PottsExpansion expansion(potts.width, potts.height, potts.weight_right,
+                                   potts.weight_down);
   expansion.SetLabeling(labels, potts.Costs(labels));
   int64_t energy = expansion.Energy();
   const int64_t start = energy;
@@ -191,7 +196,8 @@ TEST(PottsExpansionTest, EnergyNeverIncreasesAndConvergesToALocalMinimum) {
   }
   EXPECT_LT(cycles, 20);
   EXPECT_LT(energy, start);
-  // Converged: no single-pixel relabelling lowers the energy (a weaker property than expansion-optimality).
+  // Converged: no single-pixel relabelling lowers the energy (a weaker property than
+  // expansion-optimality).
   std::vector<int32_t> probe = expansion.labels();
   for (size_t p = 0; p < probe.size(); ++p) {
     const int32_t keep = probe[p];
@@ -203,7 +209,7 @@ TEST(PottsExpansionTest, EnergyNeverIncreasesAndConvergesToALocalMinimum) {
   }
 }
 
-// ---------------------------------------------------------------------------------------------------------------
+// ------------------------------------------------------------------------------------------------
 // Matcher on synthetic scenes
 
 cv::Mat RandomTexture(int rows, int cols, uint32_t seed) {
@@ -223,7 +229,8 @@ void ConstantShiftPair(int rows, int cols, int d, cv::Mat& left, cv::Mat& right)
 int CountDifferent(const cv::Mat& disparity, float expected, int x_begin) {
   int different = 0;
   for (int y = 0; y < disparity.rows; ++y) {
-    for (int x = x_begin; x < disparity.cols; ++x) different += disparity.at<float>(y, x) != expected;
+    for (int x = x_begin; x < disparity.cols; ++x)
+      different += disparity.at<float>(y, x) != expected;
   }
   return different;
 }
@@ -236,11 +243,13 @@ TEST(GraphCutMatcherTest, RecoversAConstantShift) {
   GraphCutMatcher matcher(options);
   const GraphCutResult result = matcher.ComputeDetailed(left, right);
   ASSERT_EQ(result.disparity.type(), CV_32FC1);
-  EXPECT_EQ(CountDifferent(result.disparity, 5.0f, 5), 0);  // every pixel whose match is inside the right image
+  EXPECT_EQ(CountDifferent(result.disparity, 5.0f, 5),
+            0);  // every pixel whose match is inside the right image
   EXPECT_GE(result.cycles, 1);
   EXPECT_GE(result.expansion_moves, 12);
 
-  // A range starting below zero, and the census data term under a gain and offset change of the right image.
+  // A range starting below zero, and the census data term under a gain and offset change of the
+  // right image.
   options.min_disparity = -4;
   options.num_disparities = 16;
   options.data_term = GraphCutDataTerm::kCensus;
@@ -250,7 +259,8 @@ TEST(GraphCutMatcherTest, RecoversAConstantShift) {
   EXPECT_EQ(CountDifferent(census.Compute(left, brighter), 5.0f, 5), 0);
 }
 
-// Fronto-parallel step: background at disparity 3, a rectangle in front at 9; independent random textures.
+// Fronto-parallel step: background at disparity 3, a rectangle in front at 9; independent random
+// textures.
 struct StepScene {
   cv::Mat left, right, truth, occluded;
   static constexpr int kBackground = 3, kForeground = 9;
@@ -269,12 +279,15 @@ StepScene MakeStepScene(bool color) {
   for (int y = 0; y < rows; ++y) {
     for (int x = 0; x < cols; ++x) {
       const bool front = box.contains({x, y});
-      scene.left.at<uint8_t>(y, x) = front ? foreground.at<uint8_t>(y, x) : background.at<uint8_t>(y, x);
+      scene.left.at<uint8_t>(y, x) =
+          front ? foreground.at<uint8_t>(y, x) : background.at<uint8_t>(y, x);
       scene.truth.at<float>(y, x) = front ? StepScene::kForeground : StepScene::kBackground;
-      // Right pixel x sees the foreground point at left x + 9 when it is in the box, else the background at x + 3.
+      // Right pixel x sees the foreground point at left x + 9 when it is in the box, else the
+      // background at x + 3.
       const bool right_front = box.contains({x + StepScene::kForeground, y});
-      scene.right.at<uint8_t>(y, x) = right_front ? foreground.at<uint8_t>(y, x + StepScene::kForeground)
-                                                  : background.at<uint8_t>(y, x + StepScene::kBackground);
+      scene.right.at<uint8_t>(y, x) = right_front
+                                          ? foreground.at<uint8_t>(y, x + StepScene::kForeground)
+                                          : background.at<uint8_t>(y, x + StepScene::kBackground);
       // A background left pixel is hidden in the right view when the foreground covers x - 3 there.
       if (!front && box.contains({x - StepScene::kBackground + StepScene::kForeground, y})) {
         scene.occluded.at<uint8_t>(y, x) = 1;
@@ -291,8 +304,8 @@ StepScene MakeStepScene(bool color) {
   return scene;
 }
 
-// Pixels of the non-occluded region right of the largest disparity whose estimate differs from the truth,
-// leaving out pixels within edge_margin of a depth edge.
+// Pixels of the non-occluded region right of the largest disparity whose estimate differs from the
+// truth, leaving out pixels within edge_margin of a depth edge.
 int CountErrors(const StepScene& scene, const cv::Mat& disparity, int edge_margin = 0) {
   int errors = 0;
   for (int y = 0; y < scene.truth.rows; ++y) {
@@ -301,7 +314,8 @@ int CountErrors(const StepScene& scene, const cv::Mat& disparity, int edge_margi
       bool near_edge = false;
       for (int dy = -edge_margin; dy <= edge_margin; ++dy) {
         for (int dx = -edge_margin; dx <= edge_margin; ++dx) {
-          const int yy = std::clamp(y + dy, 0, scene.truth.rows - 1), xx = std::clamp(x + dx, 0, scene.truth.cols - 1);
+          const int yy = std::clamp(y + dy, 0, scene.truth.rows - 1),
+                    xx = std::clamp(x + dx, 0, scene.truth.cols - 1);
           near_edge |= scene.truth.at<float>(yy, xx) != scene.truth.at<float>(y, x);
         }
       }
@@ -319,8 +333,8 @@ TEST(GraphCutMatcherTest, RecoversAFrontoParallelStepExactly) {
     options.num_disparities = 16;
     GraphCutMatcher matcher(options);
     const GraphCutResult result = matcher.ComputeDetailed(scene.left, scene.right);
-    // Exact away from the depth edge; at a box corner the Potts boundary length does not change when a corner
-    // pixel flips, so there the random texture decides (1-2 pixels).
+    // Exact away from the depth edge; at a box corner the Potts boundary length does not change
+    // when a corner pixel flips, so there the random texture decides (1-2 pixels).
     EXPECT_EQ(CountErrors(scene, result.disparity, /*edge_margin=*/1), 0) << "color " << color;
     EXPECT_LE(CountErrors(scene, result.disparity), 2) << "color " << color;
     ASSERT_GE(result.energy_per_cycle.size(), 2u);
@@ -358,7 +372,8 @@ TEST(GraphCutMatcherTest, LeftRightCheckFindsAndFillsOcclusions) {
   EXPECT_GE(occluded_invalid, occluded * 3 / 4);
   EXPECT_LE(visible_invalid, 4);
 
-  // Filled from the background side: the occluded band gets the background disparity, the map is dense.
+  // Filled from the background side: the occluded band gets the background disparity, the map is
+  // dense.
   options.fill_occlusions = true;
   const cv::Mat filled = GraphCutMatcher(options).Compute(scene.left, scene.right);
   EXPECT_EQ(DisparityDensity(filled), 100.0);
@@ -392,22 +407,27 @@ TEST(GraphCutMatcherTest, IsDeterministicForAnySeedAndThreadCount) {
 
 TEST(GraphCutMatcherTest, RejectsBadInputAndSkipsImpossibleLabels) {
   GraphCutMatcher matcher{GraphCutOptions{}};
-  EXPECT_THROW(matcher.Compute(cv::Mat::zeros(10, 12, CV_8UC1), cv::Mat::zeros(10, 13, CV_8UC1)), InputError);
+  EXPECT_THROW(matcher.Compute(cv::Mat::zeros(10, 12, CV_8UC1), cv::Mat::zeros(10, 13, CV_8UC1)),
+               InputError);
   EXPECT_THROW(matcher.Compute(cv::Mat(), cv::Mat()), InputError);
-  EXPECT_THROW(matcher.Compute(cv::Mat::zeros(10, 12, CV_32FC1), cv::Mat::zeros(10, 12, CV_32FC1)), InputError);
+  EXPECT_THROW(matcher.Compute(cv::Mat::zeros(10, 12, CV_32FC1), cv::Mat::zeros(10, 12, CV_32FC1)),
+               InputError);
   // No disparity of the range leaves a pixel inside the right image: nothing to estimate.
   GraphCutOptions options;
   options.min_disparity = 20;
   options.num_disparities = 4;
-  const cv::Mat none = GraphCutMatcher(options).Compute(cv::Mat::zeros(6, 16, CV_8UC1), cv::Mat::zeros(6, 16, CV_8UC1));
+  const cv::Mat none = GraphCutMatcher(options).Compute(cv::Mat::zeros(6, 16, CV_8UC1),
+                                                        cv::Mat::zeros(6, 16, CV_8UC1));
   EXPECT_EQ(DisparityDensity(none), 0.0);
 }
 
-// ---------------------------------------------------------------------------------------------------------------
-// Tsukuba (Middlebury 2001), the classic graph-cut benchmark: bad-1.0 on non-occluded pixels of the full image.
+// ------------------------------------------------------------------------------------------------
+// Tsukuba (Middlebury 2001), the classic graph-cut benchmark: bad-1.0 on non-occluded pixels of the
+// full image.
 
 TEST(GraphCutMatcherTest, TsukubaBad1NonOccluded) {
-  const std::filesystem::path dir = std::filesystem::path(LINESIGHT_SHARED_DATA_DIR) / "middlebury-2001-2003/tsukuba";
+  const std::filesystem::path dir =
+      std::filesystem::path(LINESIGHT_SHARED_DATA_DIR) / "middlebury-2001-2003/tsukuba";
   if (!std::filesystem::exists(dir / "imL.png")) GTEST_SKIP() << "no tsukuba data in " << dir;
   const cv::Mat left = cv::imread((dir / "imL.png").string(), cv::IMREAD_COLOR);
   const cv::Mat right = cv::imread((dir / "imR.png").string(), cv::IMREAD_COLOR);

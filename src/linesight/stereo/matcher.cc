@@ -8,6 +8,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/stereo/graph_cut.h"
 #include "linesight/stereo/opencv_matchers.h"
 #include "linesight/stereo/isgm.h"
 #include "linesight/stereo/sgm.h"
@@ -24,7 +25,7 @@ void MatcherOptions::Check() const {
   CheckOption(threads >= 0, "MatcherOptions.threads", threads, "must be >= 0 (0 = all cores)");
 }
 
-std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm", "isgm"}; }
+std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm", "isgm", "gc"}; }
 
 std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
                                              const MatcherOptions& options) {
@@ -41,6 +42,8 @@ std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
     matcher = CreateSgmMatcher(options, params);
   } else if (method == "isgm") {
     matcher = CreateIsgmMatcher(options, params);
+  } else if (method == "gc") {
+    matcher = CreateGraphCutMatcher(options, params);
   } else {
     throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
                                  fmt::join(MatcherNames(), ", ")));
