@@ -35,12 +35,11 @@ void AssignBand(const cv::Mat& features, const std::vector<float>& centres, int 
   const int width = features.cols, height = features.rows;
   const int y0 = CellStart(gy, height, grid_y), y1 = CellStart(gy + 1, height, grid_y);
   const int y_mid = (y0 + y1) / 2;
-  for (int y = y0; y < y1; ++y) {
-    const uint8_t* f = features.ptr<uint8_t>(y);
-    int32_t* out = labels->ptr<int32_t>(y);
-    // The nearest centres of a pixel sit in its own cell and the three cells of the quadrant it
-    // lies in.
-    const int gy_other = y < y_mid ? gy - 1 : gy + 1;
+  // The nearest centres of a pixel sit in its own cell and the three cells of the quadrant it lies
+  // in, so each quarter of a cell is one block with four fixed candidates.
+  for (int vertical = 0; vertical < 2; ++vertical) {
+    const int ya = vertical == 0 ? y0 : y_mid, yb = vertical == 0 ? y_mid : y1;
+    const int gy_other = vertical == 0 ? gy - 1 : gy + 1;
     const bool has_other_row = gy_other >= 0 && gy_other < grid_y;
     for (int gx = 0; gx < grid_x; ++gx) {
       const int x0 = CellStart(gx, width, grid_x), x1 = CellStart(gx + 1, width, grid_x);
@@ -61,35 +60,43 @@ void AssignBand(const cv::Mat& features, const std::vector<float>& centres, int 
           for (int j = i; j > 0 && cells[j - 1] > cells[j]; --j) std::swap(cells[j - 1], cells[j]);
         }
         for (int i = n; i < 4; ++i) cells[i] = cells[n - 1];
-        float row_term[4], cx[4], cf[4][kChannels];
+        float cx[4], cy[4], cf[4][kChannels];
         for (int i = 0; i < 4; ++i) {
           const float* c = &centres[static_cast<size_t>(cells[i]) * kStride];
-          const float dy = static_cast<float>(y) - c[1];
           cx[i] = c[0];
-          row_term[i] = spatial_weight * dy * dy;
+          cy[i] = c[1];
           for (int ch = 0; ch < kChannels; ++ch) cf[i][ch] = c[2 + ch];
         }
-        // Branch-free selection over exactly four candidates.
-        for (int x = xa; x < xb; ++x) {
-          const uint8_t* px = f + static_cast<ptrdiff_t>(x) * kChannels;
-          float value[kChannels];
-          for (int ch = 0; ch < kChannels; ++ch) value[ch] = px[ch];
-          float dist[4];
+        for (int y = ya; y < yb; ++y) {
+          const uint8_t* f = features.ptr<uint8_t>(y);
+          int32_t* out = labels->ptr<int32_t>(y);
+          float row_term[4];
           for (int i = 0; i < 4; ++i) {
-            const float dx = static_cast<float>(x) - cx[i];
-            dist[i] = row_term[i] + spatial_weight * dx * dx;
-            for (int ch = 0; ch < kChannels; ++ch) {
-              const float dc = value[ch] - cf[i][ch];
-              dist[i] += dc * dc;
-            }
+            const float dy = static_cast<float>(y) - cy[i];
+            row_term[i] = spatial_weight * dy * dy;
           }
-          const bool first_pair = dist[0] <= dist[1];
-          const float best01 = first_pair ? dist[0] : dist[1];
-          const int id01 = first_pair ? cells[0] : cells[1];
-          const bool second_pair = dist[2] <= dist[3];
-          const float best23 = second_pair ? dist[2] : dist[3];
-          const int id23 = second_pair ? cells[2] : cells[3];
-          out[x] = best01 <= best23 ? id01 : id23;
+          // Branch-free selection over exactly four candidates.
+          for (int x = xa; x < xb; ++x) {
+            const uint8_t* px = f + static_cast<ptrdiff_t>(x) * kChannels;
+            float value[kChannels];
+            for (int ch = 0; ch < kChannels; ++ch) value[ch] = px[ch];
+            float dist[4];
+            for (int i = 0; i < 4; ++i) {
+              const float dx = static_cast<float>(x) - cx[i];
+              dist[i] = row_term[i] + spatial_weight * dx * dx;
+              for (int ch = 0; ch < kChannels; ++ch) {
+                const float dc = value[ch] - cf[i][ch];
+                dist[i] += dc * dc;
+              }
+            }
+            const bool first_pair = dist[0] <= dist[1];
+            const float best01 = first_pair ? dist[0] : dist[1];
+            const int id01 = first_pair ? cells[0] : cells[1];
+            const bool second_pair = dist[2] <= dist[3];
+            const float best23 = second_pair ? dist[2] : dist[3];
+            const int id23 = second_pair ? cells[2] : cells[3];
+            out[x] = best01 <= best23 ? id01 : id23;
+          }
         }
       }
     }
@@ -119,57 +126,76 @@ void AssignPixelsToCentres(const cv::Mat& features, const std::vector<float>& ce
 int EnforceConnectivity(cv::Mat* labels, int min_size) {
   LS_CHECK(labels->type() == CV_32SC1 && labels->isContinuous());
   const int width = labels->cols, height = labels->rows;
-  const int total = width * height;
   int32_t* label = labels->ptr<int32_t>();
-  // Union-find over 4-neighbours with the same label; a root is the smallest pixel index of its
-  // piece, i.e. the piece's first pixel in raster order.
-  std::vector<int32_t> parent(total);
-  auto find = [&](int32_t p) {
-    while (parent[p] != p) {
-      parent[p] = parent[parent[p]];
-      p = parent[p];
-    }
-    return p;
+  // Horizontal runs of equal labels, in raster order; runs of the same label that touch vertically
+  // are united (union-find whose root is the smallest run index, i.e. the piece's first run, whose
+  // first pixel is the piece's first pixel in raster order).
+  struct Run {
+    int32_t start, length, parent;
   };
-  auto unite = [&](int32_t a, int32_t b) {
-    a = find(a), b = find(b);
-    if (a < b) {
-      parent[b] = a;
-    } else if (b < a) {
-      parent[a] = b;
-    }
-  };
-  for (int y = 0, p = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x, ++p) {
-      parent[p] = p;
-      if (x > 0 && label[p - 1] == label[p]) unite(p - 1, p);
-      if (y > 0 && label[p - width] == label[p]) unite(p - width, p);
+  std::vector<Run> runs;
+  runs.reserve(static_cast<size_t>(height) * 64);
+  std::vector<int32_t> row_begin(height + 1, 0);
+  for (int y = 0; y < height; ++y) {
+    const int32_t* l = label + static_cast<ptrdiff_t>(y) * width;
+    row_begin[y] = static_cast<int32_t>(runs.size());
+    for (int x = 0; x < width;) {
+      int end = x + 1;
+      while (end < width && l[end] == l[x]) ++end;
+      const int32_t id = static_cast<int32_t>(runs.size());
+      runs.push_back({y * width + x, end - x, id});
+      x = end;
     }
   }
-  // Piece sizes, stored at the roots (then replaced there by the piece's new label).
-  std::vector<int32_t> root_info(total, 0);
-  for (int p = 0; p < total; ++p) {
-    parent[p] = find(p);
-    ++root_info[parent[p]];
+  row_begin[height] = static_cast<int32_t>(runs.size());
+  auto find = [&](int32_t r) {
+    while (runs[r].parent != r) {
+      runs[r].parent = runs[runs[r].parent].parent;
+      r = runs[r].parent;
+    }
+    return r;
+  };
+  for (int y = 1; y < height; ++y) {
+    // Walk the runs of rows y - 1 and y together; overlapping runs with equal labels are united.
+    int above = row_begin[y - 1];
+    for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
+      const int x0 = runs[r].start - y * width, x1 = x0 + runs[r].length;
+      while (above < row_begin[y] &&
+             runs[above].start - (y - 1) * width + runs[above].length <= x0) {
+        ++above;
+      }
+      for (int a = above; a < row_begin[y] && runs[a].start - (y - 1) * width < x1; ++a) {
+        if (label[runs[a].start] != label[runs[r].start]) continue;
+        const int32_t ra = find(a), rr = find(r);
+        if (ra < rr) {
+          runs[rr].parent = ra;
+        } else if (rr < ra) {
+          runs[ra].parent = rr;
+        }
+      }
+    }
   }
-  // New labels in raster order of the pieces' first pixels. A small piece joins the piece of the
-  // pixel that precedes its first pixel (left, else above), which is already labelled.
+  // Piece sizes at the root runs, then new labels in raster order of the pieces' first pixels. A
+  // small piece joins the piece of the pixel preceding its first pixel (left, else above).
+  const int count = static_cast<int>(runs.size());
+  std::vector<int32_t> root_info(count, 0);
+  for (int r = 0; r < count; ++r) {
+    runs[r].parent = find(r);
+    root_info[runs[r].parent] += runs[r].length;
+  }
   int next = 0;
-  for (int y = 0, p = 0; y < height; ++y) {
-    for (int x = 0; x < width; ++x, ++p) {
-      if (parent[p] != p) {
-        label[p] = root_info[parent[p]];
-        continue;
-      }
-      int adjacent = -1;
-      if (x > 0) {
-        adjacent = label[p - 1];
-      } else if (y > 0) {
-        adjacent = label[p - width];
-      }
-      root_info[p] = root_info[p] < min_size && adjacent >= 0 ? adjacent : next++;
-      label[p] = root_info[p];
+  for (int r = 0; r < count; ++r) {
+    const int p = runs[r].start;
+    int value;
+    if (runs[r].parent != r) {
+      value = root_info[runs[r].parent];
+    } else {
+      const int x = p % width;
+      const int adjacent = x > 0 ? label[p - 1] : (p >= width ? label[p - width] : -1);
+      value = root_info[r] < min_size && adjacent >= 0 ? adjacent : next++;
+      root_info[r] = value;
     }
+    std::fill(label + p, label + p + runs[r].length, value);
   }
   return next;
 }
@@ -202,12 +228,14 @@ cv::Mat SegmentSuperpixels(const cv::Mat& image, const SuperpixelOptions& option
   // position and colour of its pixels (exact integer sums, so the order of summation does not
   // matter), then reassigns.
   cv::Mat labels(height, width, CV_32SC1);
+  std::vector<int32_t> cell_of_column(width);
+  for (int x = 0; x < width; ++x) {
+    cell_of_column[x] = static_cast<int32_t>(static_cast<int64_t>(x) * grid_x / width);
+  }
   for (int y = 0; y < height; ++y) {
     int32_t* l = labels.ptr<int32_t>(y);
-    const int gy = static_cast<int>(static_cast<int64_t>(y) * grid_y / height);
-    for (int x = 0; x < width; ++x) {
-      l[x] = gy * grid_x + static_cast<int>(static_cast<int64_t>(x) * grid_x / width);
-    }
+    const int row_offset = static_cast<int>(static_cast<int64_t>(y) * grid_y / height) * grid_x;
+    for (int x = 0; x < width; ++x) l[x] = row_offset + cell_of_column[x];
   }
   std::vector<float> centres(static_cast<size_t>(clusters) * stride);
   const double spatial_weight = (options.compactness / size) * (options.compactness / size);
@@ -224,6 +252,16 @@ cv::Mat SegmentSuperpixels(const cv::Mat& image, const SuperpixelOptions& option
         for (int y = height * stripe / kStripes; y < height * (stripe + 1) / kStripes; ++y) {
           const int32_t* l = labels.ptr<int32_t>(y);
           const uint8_t* f = features.ptr<uint8_t>(y);
+          if (channels == 1) {
+            for (int x = 0; x < width; ++x) {
+              int64_t* sum = &stripe_sum[static_cast<size_t>(l[x]) * 4];
+              sum[0] += x;
+              sum[1] += y;
+              sum[2] += f[x];
+              sum[3] += 1;
+            }
+            continue;
+          }
           for (int x = 0; x < width; ++x) {
             int64_t* sum = &stripe_sum[static_cast<size_t>(l[x]) * (stride + 1)];
             sum[0] += x;

@@ -135,6 +135,64 @@ TEST(SegmentSuperpixels, IndependentOfThreadCount) {
   EXPECT_EQ(cv::countNonZero(one != four), 0);
 }
 
+// Naive reference of EnforceConnectivity: flood fill from each unlabelled pixel in raster order.
+int NaiveEnforceConnectivity(cv::Mat* labels, int min_size) {
+  const int width = labels->cols, height = labels->rows;
+  cv::Mat out(labels->size(), CV_32SC1, cv::Scalar(-1));
+  int next = 0;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      if (out.at<int32_t>(y, x) >= 0) continue;
+      const int old = labels->at<int32_t>(y, x);
+      const int adjacent =
+          x > 0 ? out.at<int32_t>(y, x - 1) : (y > 0 ? out.at<int32_t>(y - 1, x) : -1);
+      std::vector<cv::Point> piece = {{x, y}};
+      out.at<int32_t>(y, x) = next;
+      for (size_t i = 0; i < piece.size(); ++i) {
+        const cv::Point p = piece[i];
+        const cv::Point around[4] = {
+            {p.x - 1, p.y}, {p.x + 1, p.y}, {p.x, p.y - 1}, {p.x, p.y + 1}};
+        for (const cv::Point& q : around) {
+          if (q.x < 0 || q.y < 0 || q.x >= width || q.y >= height) continue;
+          if (out.at<int32_t>(q) >= 0 || labels->at<int32_t>(q) != old) continue;
+          out.at<int32_t>(q) = next;
+          piece.push_back(q);
+        }
+      }
+      if (static_cast<int>(piece.size()) < min_size && adjacent >= 0) {
+        for (const cv::Point& p : piece) out.at<int32_t>(p) = adjacent;
+      } else {
+        ++next;
+      }
+    }
+  }
+  out.copyTo(*labels);
+  return next;
+}
+
+TEST(EnforceConnectivity, EqualsNaiveFloodFillOnAwkwardSizes) {
+  cv::RNG rng(13);
+  for (const cv::Size size :
+       {cv::Size(1, 1), cv::Size(7, 1), cv::Size(1, 9), cv::Size(37, 23), cv::Size(311, 239)}) {
+    for (int min_size : {0, 3, 20}) {
+      // Blocky random labels (few values) make pieces of many shapes, including nested ones.
+      cv::Mat small((size.height + 2) / 3, (size.width + 2) / 3, CV_32SC1);
+      rng.fill(small, cv::RNG::UNIFORM, 0, 4);
+      cv::Mat labels;
+      cv::resize(small, labels, size, 0, 0, cv::INTER_NEAREST);
+      for (int i = 0; i < size.area() / 10; ++i) {
+        labels.at<int32_t>(rng.uniform(0, size.height), rng.uniform(0, size.width)) =
+            rng.uniform(0, 4);
+      }
+      cv::Mat expected = labels.clone();
+      const int n_expected = NaiveEnforceConnectivity(&expected, min_size);
+      const int n = detail::EnforceConnectivity(&labels, min_size);
+      EXPECT_EQ(n, n_expected) << size << " min_size " << min_size;
+      EXPECT_EQ(cv::countNonZero(labels != expected), 0) << size << " min_size " << min_size;
+    }
+  }
+}
+
 TEST(EnforceConnectivity, SplitsPiecesAndMergesSmallOnes) {
   // Label 0 in two pieces; label 2 a single pixel (smaller than min_size 2) inside label 1.
   cv::Mat labels = (cv::Mat_<int32_t>(3, 5) << 0, 0, 1, 0, 0,  //
