@@ -4,6 +4,7 @@
 
 namespace linesight::cli {
 
+int RunDemo(int argc, char** argv);
 int RunDisparity(int argc, char** argv);
 int RunEval(int argc, char** argv);
 int RunRectify(int argc, char** argv);
@@ -13,7 +14,8 @@ int RunEvalRanging(int argc, char** argv);  // `linesight eval ranging`, dispatc
 int RunBench(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
 int RunPattern(int argc, char** argv);
-int RunEvalCalibration(int argc, char** argv);  // `linesight eval calibration`, dispatched by eval.cc
+int RunEvalCalibration(int argc,
+                       char** argv);  // `linesight eval calibration`, dispatched by eval.cc
 int RunRender(int argc, char** argv);
 
 }  // namespace linesight::cli

@@ -15,16 +15,26 @@ struct Subcommand {
 };
 
 constexpr Subcommand kSubcommands[] = {
+    {"demo", linesight::cli::RunDemo,
+     "the whole chain on the embedded synthetic power-line scene (true vs measured distance)"},
     {"disparity", linesight::cli::RunDisparity,
      "dense disparity of a stereo pair (PFM / KITTI PNG / colour)"},
-    {"eval", linesight::cli::RunEval, "evaluate matchers on public benchmarks (eval stereo)"},
-    {"rectify", linesight::cli::RunRectify, "rectify a raw stereo pair with a calibration (Bouguet)"},
-    {"cloud", linesight::cli::RunCloud, "point cloud (PLY, metres) and depth PNG from a disparity map"},
-    {"range", linesight::cli::RunRange, "distance +- sigma to obstacles in ROIs or found automatically"},
-    {"bench", linesight::cli::RunBench, "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
-    {"render", linesight::cli::RunRender, "synthetic power-line scene + calibration boards with exact ground truth"},
-    {"calibrate", linesight::cli::RunCalibrate, "stereo calibration from board images (zhang | recon | opencv)"},
-    {"pattern", linesight::cli::RunPattern, "render an LCD calibration target with its exact square size"},
+    {"eval", linesight::cli::RunEval,
+     "evaluation studies: stereo benchmarks, calibration, ranging"},
+    {"rectify", linesight::cli::RunRectify,
+     "rectify a raw stereo pair with a calibration (Bouguet)"},
+    {"cloud", linesight::cli::RunCloud,
+     "point cloud (PLY, metres) and depth PNG from a disparity map"},
+    {"range", linesight::cli::RunRange,
+     "distance +- sigma to obstacles in ROIs or found automatically"},
+    {"bench", linesight::cli::RunBench,
+     "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
+    {"render", linesight::cli::RunRender,
+     "synthetic power-line scene + calibration boards with exact ground truth"},
+    {"calibrate", linesight::cli::RunCalibrate,
+     "stereo calibration from board images (zhang | recon | opencv)"},
+    {"pattern", linesight::cli::RunPattern,
+     "render an LCD calibration target with its exact square size"},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The README's main command: installs every dependency, builds linesight and runs the main job.
+# The README's main command: installs every dependency, builds linesight and runs the main job,
+# `linesight demo` on the embedded synthetic power-line scene.
 # Idempotent; run from anywhere inside a clone. Output goes to ./out (or $OUT).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,5 +11,4 @@ bash scripts/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$JOBS" --target linesight
 mkdir -p "$OUT"
-./build/apps/linesight eval stereo --data /usr/share/doc/opencv-doc/examples/data --methods sgbm,bm \
-  --plots "$OUT/plots" --json "$OUT/eval.json"
+./build/apps/linesight demo --out "$OUT"

@@ -107,6 +107,8 @@ struct Study {
 
 constexpr Study kStudies[] = {
     {"stereo", RunEvalStereo, "matchers on public benchmarks (Middlebury, KITTI, ETH3D, ...)"},
+    {"calibration", RunEvalCalibration,
+     "calibration simulation study: zhang / recon / opencv vs the Cramer-Rao bound"},
     {"ranging", RunEvalRanging,
      "ranging accuracy on rendered power-line scenes + Middlebury metric depth"},
 };

@@ -1,0 +1,260 @@
+#include "linesight/demo/demo.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/calib/calibration_report.h"
+#include "linesight/calib/pattern.h"
+#include "linesight/calib/stereo_calibrator.h"
+#include "linesight/core/error.h"
+#include "linesight/core/timer.h"
+#include "linesight/geometry/point_cloud.h"
+#include "linesight/io/disparity_io.h"
+#include "linesight/io/image_io.h"
+#include "linesight/io/json_io.h"
+#include "linesight/io/pfm.h"
+#include "linesight/io/stereo_calibration.h"
+#include "linesight/ranging/pipeline.h"
+
+namespace linesight {
+namespace fs = std::filesystem;
+
+void DemoOptions::Check() const {
+  CheckOption(!out_dir.empty(), "DemoOptions.out_dir", "(empty)", "name an output folder");
+  CheckOption(!obstacles.empty(), "DemoOptions.obstacles", "(none)", "give at least one obstacle");
+  CheckOption(board_views >= 3, "DemoOptions.board_views", board_views, "must be >= 3");
+  CheckOption(min_depth_m > 0 && max_depth_m > min_depth_m, "DemoOptions.min_depth_m/max_depth_m",
+              fmt::format("{}..{}", min_depth_m, max_depth_m), "need 0 < min < max");
+  CheckOption(threads >= 0, "DemoOptions.threads", threads, "must be >= 0");
+  calib::ParseMethod(calibration_method);
+}
+
+namespace {
+
+void Log(std::FILE* log, const std::string& text) {
+  if (!log) return;
+  std::fprintf(log, "%s\n", text.c_str());
+  std::fflush(log);
+}
+
+// The true box lives in the renderer's rectified frame; the estimated calibration rectifies
+// slightly differently, so the ROI gets a margin.
+cv::Rect DilateRoi(const cv::Rect& box, cv::Size image) {
+  const int mx = std::max(6, box.width / 6), my = std::max(6, box.height / 6);
+  cv::Rect roi(box.x - mx, box.y - my, box.width + 2 * mx, box.height + 2 * my);
+  return roi & cv::Rect(0, 0, image.width, image.height);
+}
+
+calib::StereoCalibrationResult CalibrateFromBoards(const DemoOptions& options, const fs::path& dir,
+                                                   nlohmann::json* json, StereoCalibration* out,
+                                                   std::FILE* log) {
+  sim::CalibrationBoardOptions board_options;
+  board_options.seed = options.seed;
+  board_options.num_stereo_views = options.board_views;
+  const sim::CalibrationBoardSet boards = sim::RenderCalibrationBoards(board_options);
+  fs::create_directories(dir);
+  sim::WriteCalibrationBoards(dir, boards);
+  std::vector<fs::path> left_paths, right_paths;
+  for (size_t i = 0; i < boards.views.size(); ++i) {
+    left_paths.push_back(dir / fmt::format("left_{:02d}.png", i));
+    right_paths.push_back(dir / fmt::format("right_{:02d}.png", i));
+  }
+  const calib::PatternSpec spec = calib::ParsePatternSpec(fmt::format(
+      "chessboard:{}x{}:{}", boards.board.cols, boards.board.rows, boards.board.square_m));
+  const calib::StereoDetections detections =
+      calib::DetectStereoPairs(left_paths, right_paths, spec, calib::DetectionOptions(), false);
+  const calib::StereoObservations observations =
+      calib::ObservationsFromDetections(detections, calib::MakeBoardGeometry(spec));
+  calib::StereoCalibrationOptions calib_options;
+  calib_options.method = calib::ParseMethod(options.calibration_method);
+  const calib::StereoCalibrationResult estimate =
+      calib::CalibrateStereo(observations, calib_options);
+  const calib::CalibrationReport report = calib::EvaluateCalibration(observations, estimate);
+  *out = report.calibration;
+  const StereoCalibration& truth = boards.calibration;
+  const double true_baseline = cv::norm(truth.T);
+  const double est_baseline = cv::norm(out->T);
+  (*json)["calibration"] = {{"method", options.calibration_method},
+                            {"views_detected_both", detections.BothCount()},
+                            {"views_rendered", boards.views.size()},
+                            {"stereo_rms_px", report.stereo_rms_px},
+                            {"epipolar_mean_abs_dy_px", report.epipolar_mean_abs_dy_px},
+                            {"reconstruction_percent", report.reconstruction_percent},
+                            {"fx_left_true", truth.M1.at<double>(0, 0)},
+                            {"fx_left_estimated", out->M1.at<double>(0, 0)},
+                            {"baseline_true_m", true_baseline},
+                            {"baseline_estimated_m", est_baseline}};
+  Log(log, fmt::format(
+               "  calibration ({}): {} of {} views detected in both cameras, stereo RMS {:.3f} px, "
+               "fx {:.2f} (true {:.2f}), baseline {:.2f} mm (true {:.2f})",
+               options.calibration_method, detections.BothCount(), boards.views.size(),
+               report.stereo_rms_px, out->M1.at<double>(0, 0), truth.M1.at<double>(0, 0),
+               est_baseline * 1000, true_baseline * 1000));
+  return estimate;
+}
+
+void DrawLabelledBox(cv::Mat& image, const cv::Rect& box, const std::string& label,
+                     const cv::Scalar& colour) {
+  cv::rectangle(image, box, colour, 2);
+  int baseline = 0;
+  const cv::Size text = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline);
+  cv::Point origin(box.x, std::max(text.height + 2, box.y - 4));
+  cv::rectangle(
+      image,
+      cv::Rect(origin.x, origin.y - text.height - 2, text.width + 4, text.height + baseline + 3),
+      cv::Scalar(0, 0, 0), cv::FILLED);
+  cv::putText(image, label, origin + cv::Point(2, 0), cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1,
+              cv::LINE_AA);
+}
+
+}  // namespace
+
+std::string DemoReport::Table() const {
+  std::string out =
+      "| obstacle | true distance (m) | measured (m) | sigma (m) | error | auto-found (m) |\n"
+      "|---|---|---|---|---|---|\n";
+  for (const DemoObstacleRow& r : rows) {
+    if (r.measured) {
+      out += fmt::format("| {} | {:.3f} | {:.3f} | {:.3f} | {:+.2f} % | {} |\n", r.type,
+                         r.true_distance_m, r.distance_m, r.sigma_m, r.error_percent,
+                         r.auto_found ? fmt::format("{:.3f}", r.auto_distance_m) : "not found");
+    } else {
+      out += fmt::format("| {} | {:.3f} | no measurement ({}) | | | {} |\n", r.type,
+                         r.true_distance_m, r.reason,
+                         r.auto_found ? fmt::format("{:.3f}", r.auto_distance_m) : "not found");
+    }
+  }
+  return out;
+}
+
+DemoReport RunDemo(const DemoOptions& options, std::FILE* log) {
+  options.Check();
+  fs::create_directories(options.out_dir);
+  Stopwatch total;
+  DemoReport report;
+  nlohmann::json& json = report.json;
+
+  // 1. Calibration from rendered boards (or the true calibration).
+  Stopwatch watch;
+  sim::PowerLineSceneOptions scene_options;
+  scene_options.seed = options.seed;
+  scene_options.obstacles = options.obstacles;
+  StereoCalibration calibration;
+  if (options.use_true_calibration) {
+    calibration = sim::MakeStereoCalibration(scene_options.rig);
+    json["calibration"] = {{"method", "true"}};
+    Log(log, "  calibration: the renderer's true calibration");
+  } else {
+    Log(log, fmt::format("  rendering {} calibration board views and calibrating...",
+                         options.board_views));
+    CalibrateFromBoards(options, options.out_dir / "boards", &json, &calibration, log);
+  }
+  WriteStereoCalibration(options.out_dir / "stereo.yml", calibration);
+  json["timing_ms"]["calibration"] = watch.ElapsedMs();
+
+  // 2. The scene.
+  watch.Restart();
+  const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
+  sim::WritePowerLineScene(options.out_dir / "scene", scene);
+  json["timing_ms"]["render"] = watch.ElapsedMs();
+  Log(log, fmt::format("  rendered the scene ({}x{}, {} obstacles) in {:.0f} ms", scene.left.cols,
+                       scene.left.rows, scene.obstacles.size(), watch.ElapsedMs()));
+
+  // 3. Rectify + match + range.
+  watch.Restart();
+  RangingPipelineOptions pipeline_options;
+  pipeline_options.method = options.method;
+  pipeline_options.threads = options.threads;
+  pipeline_options.min_depth_m = options.min_depth_m;
+  pipeline_options.max_depth_m = options.max_depth_m;
+  const RangingPipeline pipeline(calibration, pipeline_options);
+  const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+  const double match_ms = watch.ElapsedMs();
+  watch.Restart();
+  std::vector<cv::Rect> rois;
+  for (const sim::RenderedObstacle& o : scene.obstacles)
+    rois.push_back(DilateRoi(o.box, frame.disparity.size()));
+  const std::vector<RangeResult> measured = pipeline.RangeRois(frame, rois);
+  const std::vector<RangeResult> found = pipeline.RangeAuto(frame);
+  json["timing_ms"]["rectify_and_match"] = match_ms;
+  json["timing_ms"]["ranging"] = watch.ElapsedMs();
+  Log(log, fmt::format("  rectified and matched with {} ({} disparities from {}) in {:.0f} ms",
+                       pipeline.method(), pipeline.search_range().num_disparities,
+                       pipeline.search_range().min_disparity, match_ms));
+
+  // 4. Compare with the truth.
+  nlohmann::json obstacles = nlohmann::json::array();
+  for (size_t i = 0; i < scene.obstacles.size(); ++i) {
+    const sim::RenderedObstacle& truth = scene.obstacles[i];
+    DemoObstacleRow row;
+    row.type = sim::ObstacleTypeName(truth.type);
+    row.true_distance_m = truth.distance_m;
+    row.measured = measured[i].ok();
+    row.reason = measured[i].reason;
+    row.distance_m = measured[i].distance_m;
+    row.sigma_m = measured[i].sigma_m;
+    row.error_percent =
+        row.measured ? 100.0 * (row.distance_m - row.true_distance_m) / row.true_distance_m : 0;
+    int best_overlap = 0;
+    for (const RangeResult& r : found) {
+      if (!r.ok()) continue;
+      const int overlap = (r.box & rois[i]).area();
+      if (overlap > best_overlap) {
+        best_overlap = overlap;
+        row.auto_found = true;
+        row.auto_distance_m = r.distance_m;
+      }
+    }
+    nlohmann::json o = RangeResultToJson(measured[i]);
+    o["type"] = row.type;
+    o["true_distance_m"] = row.true_distance_m;
+    o["error_percent"] = row.error_percent;
+    o["auto_found"] = row.auto_found;
+    if (row.auto_found) o["auto_distance_m"] = row.auto_distance_m;
+    obstacles.push_back(o);
+    report.rows.push_back(row);
+  }
+  json["obstacles"] = obstacles;
+  nlohmann::json auto_json = nlohmann::json::array();
+  for (const RangeResult& r : found) auto_json.push_back(RangeResultToJson(r));
+  json["auto_found"] = auto_json;
+  json["method"] = pipeline.method();
+  json["matcher"] = pipeline.matcher().Settings();
+  json["distance_definition"] =
+      "depth of the obstacle's nearest visible surface along the rectified left optical axis";
+
+  // 5. Outputs for people.
+  const DisparityRange& range = pipeline.disparity_range();
+  cv::Mat colour = ColorizeDisparity(frame.disparity, static_cast<float>(range.min_disparity),
+                                     static_cast<float>(range.max_disparity()));
+  cv::Mat rectified = frame.left_rectified.clone();
+  if (rectified.channels() == 1) cv::cvtColor(rectified, rectified, cv::COLOR_GRAY2BGR);
+  for (size_t i = 0; i < report.rows.size(); ++i) {
+    const DemoObstacleRow& row = report.rows[i];
+    const std::string label = row.measured
+                                  ? fmt::format("{} {:.2f}+-{:.2f} m (true {:.2f})", row.type,
+                                                row.distance_m, row.sigma_m, row.true_distance_m)
+                                  : fmt::format("{}: no measurement", row.type);
+    const cv::Rect box = measured[i].ok() ? measured[i].box : rois[i];
+    DrawLabelledBox(colour, box, label, cv::Scalar(255, 255, 255));
+    DrawLabelledBox(rectified, box, label, cv::Scalar(0, 255, 255));
+  }
+  WriteImage(options.out_dir / "left.png", scene.left);
+  WriteImage(options.out_dir / "right.png", scene.right);
+  WriteImage(options.out_dir / "rectified_left_ranged.png", rectified);
+  WriteImage(options.out_dir / "disparity.png", colour);
+  WritePfm(options.out_dir / "disparity.pfm", frame.disparity);
+  CloudOptions cloud_options;
+  cloud_options.max_depth_m = options.max_depth_m * 1.5;
+  WritePly(options.out_dir / "cloud.ply",
+           MakePointCloud(frame.disparity, pipeline.rectified_calibration(), frame.left_rectified,
+                          cloud_options));
+  json["timing_ms"]["total"] = total.ElapsedMs();
+  WriteJson(options.out_dir / "report.json", json);
+  return report;
+}
+
+}  // namespace linesight
