@@ -47,21 +47,24 @@ struct SgmOptions {
 
   // --- path aggregation ---
   int num_paths = 8;  // 4 (horizontal + vertical) or 8 (plus the diagonals)
-  int p1 = 10;        // penalty for a disparity change of ±1 px along a path (cost units)
-  int p2 = 120;       // penalty for a larger disparity change (cost units), > p1
+  // Defaults chosen once for all scenes on Middlebury 2001/2003 (bad-1 nonocc) and checked on 2005/2006 half
+  // size (bad-2 nonocc); see the README. With census 9×7 (62 bits), p2 <= 192 keeps path costs in uint8 (fast).
+  int p1 = 28;        // penalty for a disparity change of ±1 px along a path (cost units)
+  int p2 = 100;       // penalty for a larger disparity change (cost units), > p1
   // P2 adapted to the intensity step |ΔI| between a pixel and its predecessor on the path (grey levels):
   // P2' = max(p1 + 1, p2 * alpha / (alpha + |ΔI|)) in integer arithmetic, so depth discontinuities, which
   // usually coincide with intensity edges, are cheaper. 0 = constant P2.
-  int p2_gradient_alpha = 0;
+  int p2_gradient_alpha = 30;
 
   // --- winner-takes-all and post-processing ---
   // Uniqueness ratio (percent): the winner is rejected when some disparity more than 1 px away has an
-  // aggregated cost below best * 100 / (100 - uniqueness_ratio). 0 = off.
-  int uniqueness_ratio = 5;
+  // aggregated cost below best * 100 / (100 - uniqueness_ratio). 0 = off (the default: on the dense
+  // Middlebury metrics the density it costs outweighs the errors it removes; the left-right check does more).
+  int uniqueness_ratio = 0;
   SgmSubpixel subpixel = SgmSubpixel::kEquiangular;
   // Largest allowed |d_left(x) - d_right(x - d_left(x))| between the integer left and right winners (px);
   // -1 = no left-right check.
-  int lr_max_diff = 1;
+  int lr_max_diff = 2;
   int speckle_window = 100;     // largest blob (px) of similar disparities removed as a speckle; 0 = off
   double speckle_range = 2.0;   // largest disparity step (px) inside one speckle blob
   bool median = true;           // 3×3 median over valid neighbours of each valid pixel

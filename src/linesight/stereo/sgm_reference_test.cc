@@ -94,14 +94,16 @@ struct Config {
   int bt_weight = 0;
   int alpha = 0;
   int p2 = SgmOptions().p2;
+  int uniqueness = 0;
+  int lr_max_diff = 2;
   SgmSubpixel subpixel = SgmSubpixel::kEquiangular;
   int census_width = 9, census_height = 7;
 };
 
 std::string Describe(const Config& c) {
-  return fmt::format("{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} p2={} subpixel={} census={}x{}",
+  return fmt::format("{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} p2={} u={} lr={} subpixel={} census={}x{}",
                      c.width, c.height, c.min_disparity, c.num_disparities, c.paths, c.threads, c.bt_weight,
-                     c.alpha, c.p2, static_cast<int>(c.subpixel), c.census_width, c.census_height);
+                     c.alpha, c.p2, c.uniqueness, c.lr_max_diff, static_cast<int>(c.subpixel), c.census_width, c.census_height);
 }
 
 SgmOptions OptionsFor(const Config& c) {
@@ -113,6 +115,8 @@ SgmOptions OptionsFor(const Config& c) {
   o.bt_weight = c.bt_weight;
   o.p2_gradient_alpha = c.alpha;
   o.p2 = c.p2;
+  o.uniqueness_ratio = c.uniqueness;
+  o.lr_max_diff = c.lr_max_diff;
   o.subpixel = c.subpixel;
   o.census_width = c.census_width;
   o.census_height = c.census_height;
@@ -307,7 +311,11 @@ std::vector<Config> Configs() {
   c.min_disparity = 5;
   c.paths = 4;
   c.threads = 2;
+  c.uniqueness = 10;
+  c.lr_max_diff = 1;
   configs.push_back(c);
+  c.uniqueness = 0;
+  c.lr_max_diff = 0;
   c.p2 = 300;  // census only, but too large a P2 for uint8 path costs
   c.paths = 8;
   configs.push_back(c);
