@@ -30,11 +30,11 @@ RangingPipeline::RangingPipeline(const StereoCalibration& calib,
   geometry_ = GeometryFromCalibration(rectified_calibration_);
   disparity_range_ = DisparityRangeForDepths(geometry_, options_.min_depth_m, options_.max_depth_m,
                                              options_.disparity_margin_px);
-  // Ranging keeps the disparities of the searched range: the working range plus the margin.
-  const double near = geometry_.DepthFromDisparity(disparity_range_.max_disparity());
-  const double far = disparity_range_.min_disparity + geometry_.disparity_offset_px > 0
-                         ? geometry_.DepthFromDisparity(disparity_range_.min_disparity)
-                         : 10.0 * options_.max_depth_m;
+  // Ranging keeps the working range widened by 5 % so that an obstacle right at max_depth_m keeps
+  // its pixels despite matching noise; wider would let mismatched background (which the matcher is
+  // forced to place at the far end of the range) outvote a poorly matched near obstacle.
+  const double near = options_.min_depth_m / 1.05;
+  const double far = options_.max_depth_m * 1.05;
   options_.ranging.min_depth_m = near;
   options_.ranging.max_depth_m = far;
   options_.finder.min_depth_m = near;
