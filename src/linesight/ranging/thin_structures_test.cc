@@ -30,7 +30,8 @@ TEST(BodyMaskTest, DropsTheConductorAndKeepsTheBlock) {
   EXPECT_EQ(body.at<uchar>(78 - 40, 168 - 100), 255);  // block centre
   EXPECT_EQ(body.at<uchar>(62 - 40, 168 - 100), 255);  // near the block's top edge (grown back)
   EXPECT_GT(cv::countNonZero(body), 37 * 37 * 8 / 10);
-  // Conductor pixels right under the block (same depth, within the body radius of 8 px) are kept with it.
+  // Conductor pixels right under the block (same depth, within the body radius of 8 px) are kept
+  // with it.
   EXPECT_LT(cv::countNonZero(body), 37 * 37 + 37 * 16);
 }
 
