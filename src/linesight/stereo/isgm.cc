@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <opencv2/core/utility.hpp>
+
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 
@@ -31,6 +33,9 @@ IsgmMatcher::IsgmMatcher(const IsgmOptions& options) : options_(options), sgm_(o
 IsgmResult IsgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right) {
   IsgmResult result;
   result.sgm = sgm_.ComputeDetailed(left, right);
+  // The refinement runs on OpenCV's thread pool (like the OpenCV matchers, we size it from the
+  // options); its result does not depend on the thread count.
+  if (options_.sgm.threads > 0) cv::setNumThreads(options_.sgm.threads);
   // Superpixels on the grey image: as accurate as 8-bit Lab on every benchmark set we measured
   // (better on ETH3D, KITTI, Middlebury 2005/2014) at a third of the distance computations.
   const cv::Mat left_for_segments = ToGray8(left), right_for_segments = ToGray8(right);
