@@ -68,23 +68,27 @@ struct GraphCutOptions {
 
   // --- data term ---
   GraphCutDataTerm data_term = GraphCutDataTerm::kBirchfieldTomasi;
-  bool use_color =
-      true;  // BT on each colour channel, averaged, when the input is BGR; false = on grey
+  // BT on each colour channel, averaged, when the input is BGR; false = on grey.
+  bool use_color = true;
   int census_window = 5;  // census window side (px, odd, 3..7; at most 48 bits)
   // Data cost saturation: grey levels for BT, bits for census (> 0). Limits the pull of occluded
-  // and non-Lambertian pixels.
-  double truncation = 20;
+  // and non-Lambertian pixels. (λ = 10, truncation = 10, edge 8 / ×2 were the best of a small
+  // grid on tsukuba and hold on venus, teddy and cones.)
+  double truncation = 10;
 
   // --- smoothness term (same units as the data term) ---
-  double lambda =
-      20;  // Potts penalty λ for a disparity change between 4-neighbours across an intensity edge
+  // Potts penalty λ for a disparity change between 4-neighbours across an intensity edge.
+  double lambda = 10;
   // Neighbours whose intensities differ by less than this (grey levels; max over colour channels)
   // are "similar": their penalty is λ · edge_multiplier. 0 = every pair gets λ.
   int edge_threshold = 8;
   double edge_multiplier = 2;  // factor (>= 1) on λ between similar neighbours
 
   // --- optimisation ---
-  int iterations = 3;  // maximum cycles over all labels (each cycle = one expansion move per label)
+  // Maximum cycles over all labels (one expansion move per label each); the optimisation also
+  // stops after a cycle that does not lower the energy. On Middlebury 2001-2003 a third cycle
+  // lowers E by < 0.5 % and changes bad-1 by < 0.1 points, at 50 % more time.
+  int iterations = 2;
   GraphCutLabelOrder label_order = GraphCutLabelOrder::kRandom;
   uint64_t seed = 1;  // seed of the random label order
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -449,7 +450,9 @@ TEST(GraphCutMatcherTest, TsukubaBad1NonOccluded) {
   ASSERT_GT(evaluated, 50000);
   const double bad_percent = 100.0 * bad / evaluated;
   RecordProperty("bad1_nonocc_percent", std::to_string(bad_percent));
-  EXPECT_LE(bad_percent, 3.0);
+  std::printf("tsukuba gc bad-1.0 nonocc = %.2f %%\n", bad_percent);
+  // Issue acceptance is 3 %; 1.89 % was measured with these settings (published GC: 1.2-1.9 %).
+  EXPECT_LE(bad_percent, 2.5);
 }
 
 }  // namespace
