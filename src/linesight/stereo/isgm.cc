@@ -85,6 +85,7 @@ IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params
   r.adopt_neighbour_planes = params.GetBool("adopt_planes", r.adopt_neighbour_planes);
   r.snap_inliers = params.GetBool("snap_inliers", r.snap_inliers);
   r.photometric_radius = params.GetInt("photometric_radius", r.photometric_radius);
+  r.median_size = params.GetInt("final_median", r.median_size);
   o.Check();
   return o;
 }

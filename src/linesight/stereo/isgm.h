@@ -56,7 +56,8 @@ class IsgmMatcher final : public StereoMatcher {
 // census_height, bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel,
 // lr_max_diff, speckle_window, speckle_range, median; defaults from IsgmDefaultSgmOptions) plus
 // superpixel_size, superpixel_compactness, plane_inlier, plane_outlier, plane_min_inlier_ratio,
-// plane_max_slant, two_planes, adopt_planes, snap_inliers, photometric_radius.
+// plane_max_slant, two_planes, adopt_planes, snap_inliers, photometric_radius, final_median (0 | 3
+// | 5).
 IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params);
 
 // Factory hook used by CreateMatcher("isgm", ...).

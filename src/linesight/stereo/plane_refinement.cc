@@ -6,6 +6,7 @@
 #include <optional>
 
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
@@ -32,6 +33,8 @@ void PlaneRefinementOptions::Check() const {
   CheckOption(min_second_plane_ratio >= 0 && min_second_plane_ratio <= 1,
               "PlaneRefinementOptions.min_second_plane_ratio", min_second_plane_ratio,
               "must be in [0, 1]");
+  CheckOption(median_size == 0 || median_size == 1 || median_size == 3 || median_size == 5,
+              "PlaneRefinementOptions.median_size", median_size, "must be 0, 1, 3 or 5 px");
   CheckOption(photometric_radius >= 0, "PlaneRefinementOptions.photometric_radius",
               photometric_radius, "must be >= 0 px (0 = off)");
   CheckOption(photometric_truncation >= 1, "PlaneRefinementOptions.photometric_truncation",
@@ -65,7 +68,8 @@ nlohmann::json PlaneRefinementOptions::ToJson() const {
           {"photometric_radius", photometric_radius},
           {"photometric_truncation", photometric_truncation},
           {"adopt_neighbour_planes", adopt_neighbour_planes},
-          {"snap_inliers", snap_inliers}};
+          {"snap_inliers", snap_inliers},
+          {"median_size", median_size}};
 }
 
 nlohmann::json PlaneRefinementStats::ToJson() const {
@@ -714,6 +718,13 @@ cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_
   detail::ApplySegmentPlanes(index, models, options, photometry ? &*photometry : nullptr, min_value,
                              max_value, &out, &st);
   st.holes_filled_from_background = detail::FillFromBackground(&out);
+  if (options.median_size > 1) {
+    // A last median over the dense map removes the streaks of row-wise filling and isolated
+    // remaining mismatches (Hirschmueller 2008 smooths the same way).
+    cv::Mat smoothed;
+    cv::medianBlur(out, smoothed, options.median_size);
+    out = smoothed;
+  }
   st.fill_ms = watch.ElapsedMs();
   return out;
 }

@@ -1,22 +1,19 @@
 // ISGM refinement: least-squares disparity planes inside superpixels of the left image.
 //
 // Stages (each a free function in linesight::detail):
-//   SegmentSuperpixels         superpixels of the left image (superpixels.h)
-//   BuildSegmentIndex          pixel lists per segment
-//   FitSegmentPlanes           per segment a robust plane d = a*x + b*y + c through its valid
-//   disparities:
-//                              RANSAC on a deterministic sample, then iterated least squares on the
-//                              inliers (3x3 normal equations); validated by inlier ratio, residual
-//                              RMS and slant; a segment that one plane does not explain may take
-//                              two planes (it straddles a depth edge) or none
-//   AdoptNeighbourPlanes       a segment without a plane of its own takes the plane of an adjacent
-//   segment
-//                              that explains its valid disparities
-//   ApplySegmentPlanes         outliers (far from the accepted plane) and holes take the plane
-//   value FillFromBackground         what is still invalid takes the smaller (background) disparity
-//   of the nearest
-//                              valid pixels to the left and right along the row (Hirschmueller's
-//                              occlusion filling); the result is 100 % dense
+//  1. SegmentSuperpixels: superpixels of the left image (superpixels.h).
+//  2. BuildSegmentIndex: pixel lists per segment.
+//  3. FitSegmentPlanes: per segment a robust plane d = a*x + b*y + c through its valid
+//     disparities: RANSAC on a deterministic sample, then iterated least squares on the inliers
+//     (3x3 normal equations); validated by inlier ratio, residual RMS and slant. A segment that one
+//     plane does not explain may take two planes (it straddles a depth edge) or none.
+//  4. AdoptNeighbourPlanes: a segment without a plane of its own takes the plane of an adjacent
+//     segment that explains its valid disparities.
+//  5. ApplySegmentPlanes: outliers (far from the accepted plane) and holes take the plane value.
+//  6. FillFromBackground: what is still invalid takes the smaller (background) disparity of the
+//     nearest valid pixels left and right on its row (Hirschmueller's occlusion filling), so the
+//     result is 100 % dense.
+//  7. A final median (cv::medianBlur, PlaneRefinementOptions::median_size).
 // Every stage is deterministic and independent of the thread count (per-segment work writes only
 // its own pixels; RANSAC draws from a generator seeded by the segment number).
 #pragma once
@@ -77,6 +74,8 @@ struct PlaneRefinementOptions {
   bool adopt_neighbour_planes = true;
   // Also replace valid disparities near the plane (within outlier_threshold) by the plane value.
   bool snap_inliers = false;
+  // px: window of the median filter over the final dense map, 0 or 1 = off, 3 or 5.
+  int median_size = 5;
 
   void Check() const;
   nlohmann::json ToJson() const;
