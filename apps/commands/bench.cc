@@ -14,9 +14,10 @@
 namespace linesight::cli {
 
 int RunBench(int argc, char** argv) {
-  CLI::App app{"Throughput (ms, fps, MDE/s, peak memory) of dense matchers on the same images in one run: "
-               "sgm, isgm and OpenCV StereoSGBM (sgbm-3way = MODE_SGBM_3WAY, sgbm-hh = MODE_HH).",
-               "bench"};
+  CLI::App app{
+      "Throughput (ms, fps, MDE/s, peak memory) of dense matchers on the same images in one run: "
+      "sgm, isgm and OpenCV StereoSGBM (sgbm-3way = MODE_SGBM_3WAY, sgbm-hh = MODE_HH).",
+      "bench"};
   BenchOptions options;
   std::vector<std::string> sizes = {"752x480x128", "752x480x192", "1242x375x128"};
   std::string left_path, right_path, json_path;
@@ -24,14 +25,18 @@ int RunBench(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--methods", options.methods,
-                 "matcher names (any of the factory's, plus sgbm-3way and sgbm-hh); unknown ones are skipped")
+                 "matcher names (any of the factory's, plus sgbm-3way and sgbm-hh); unknown ones "
+                 "are skipped")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--runs", options.runs, "timed runs per method and size (median reported)")->capture_default_str();
-  app.add_option("--warmup", options.warmup, "untimed warm-up runs (discarded)")->capture_default_str();
+  app.add_option("--runs", options.runs, "timed runs per method and size (median reported)")
+      ->capture_default_str();
+  app.add_option("--warmup", options.warmup, "untimed warm-up runs (discarded)")
+      ->capture_default_str();
   app.add_option("--threads", options.threads, "worker threads for every method (0 = all cores)")
       ->capture_default_str();
-  app.add_option("--left", left_path, "left image to resize to each size (default: synthetic textured pair)");
+  app.add_option("--left", left_path,
+                 "left image to resize to each size (default: synthetic textured pair)");
   app.add_option("--right", right_path, "right image (with --left)");
   app.add_option("--json", json_path, "machine-readable report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {
@@ -43,13 +48,15 @@ int RunBench(int argc, char** argv) {
       options.right = ReadImage(right_path, ImageColor::kGray);
       if (options.left.size() != options.right.size()) {
         throw InputError(fmt::format("{} is {}x{} but {} is {}x{}", left_path, options.left.cols,
-                                     options.left.rows, right_path, options.right.cols, options.right.rows));
+                                     options.left.rows, right_path, options.right.cols,
+                                     options.right.rows));
       }
     }
     const BenchReport report = RunThroughputBench(options, [](const BenchRow& row) {
-      std::fprintf(stderr, "bench: %s %dx%dx%d %s\n", row.method.c_str(), row.size.width, row.size.height,
-                   row.size.num_disparities,
-                   row.skipped ? ("skipped: " + row.note).c_str() : fmt::format("{:.1f} ms", row.median_ms).c_str());
+      std::fprintf(stderr, "bench: %s %dx%dx%d %s\n", row.method.c_str(), row.size.width,
+                   row.size.height, row.size.num_disparities,
+                   row.skipped ? ("skipped: " + row.note).c_str()
+                               : fmt::format("{:.1f} ms", row.median_ms).c_str());
     });
     if (json_path != "-") std::fputs(BenchMarkdown(report).c_str(), stdout);
     if (!json_path.empty()) WriteJson(json_path, BenchJson(report));

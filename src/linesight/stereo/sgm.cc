@@ -36,23 +36,26 @@ int EffectiveThreads(int requested) {
 }  // namespace
 
 void SgmOptions::Check() const {
-  CheckOption(num_disparities >= 1 && num_disparities <= 1024, "SgmOptions.num_disparities", num_disparities,
-              "must be in [1, 1024]");
-  CheckOption(min_disparity >= -2000, "SgmOptions.min_disparity", min_disparity, "must be >= -2000");
+  CheckOption(num_disparities >= 1 && num_disparities <= 1024, "SgmOptions.num_disparities",
+              num_disparities, "must be in [1, 1024]");
+  CheckOption(min_disparity >= -2000, "SgmOptions.min_disparity", min_disparity,
+              "must be >= -2000");
   CheckOption(min_disparity + num_disparities <= 2000, "SgmOptions.min_disparity", min_disparity,
               "min_disparity + num_disparities must be <= 2000 (int16 fixed point)");
   CheckOption(threads >= 0, "SgmOptions.threads", threads, "must be >= 0 (0 = all cores)");
-  CheckOption(census_width >= 1 && census_width <= 15 && census_width % 2 == 1, "SgmOptions.census_width",
-              census_width, "must be odd and in [1, 15]");
+  CheckOption(census_width >= 1 && census_width <= 15 && census_width % 2 == 1,
+              "SgmOptions.census_width", census_width, "must be odd and in [1, 15]");
   CheckOption(census_height >= 1 && census_height <= 15 && census_height % 2 == 1,
               "SgmOptions.census_height", census_height, "must be odd and in [1, 15]");
   CheckOption(census_width * census_height - 1 <= 64 && census_width * census_height >= 3,
               "SgmOptions.census_width", census_width,
               "census_width * census_height - 1 must be in [2, 64] (bits of the census code)");
-  CheckOption(bt_weight >= 0 && bt_weight <= 64, "SgmOptions.bt_weight", bt_weight, "must be in [0, 64]");
+  CheckOption(bt_weight >= 0 && bt_weight <= 64, "SgmOptions.bt_weight", bt_weight,
+              "must be in [0, 64]");
   CheckOption(bt_truncation >= 1 && bt_truncation <= 255, "SgmOptions.bt_truncation", bt_truncation,
               "must be in [1, 255]");
-  CheckOption(num_paths == 4 || num_paths == 8, "SgmOptions.num_paths", num_paths, "must be 4 or 8");
+  CheckOption(num_paths == 4 || num_paths == 8, "SgmOptions.num_paths", num_paths,
+              "must be 4 or 8");
   CheckOption(p1 >= 0, "SgmOptions.p1", p1, "must be >= 0");
   CheckOption(p2 > p1, "SgmOptions.p2", p2, "must be > p1");
   const int max_cost = census_width * census_height - 1 + (bt_weight * 2 * bt_truncation) / 16;
@@ -60,12 +63,14 @@ void SgmOptions::Check() const {
               "p2 + largest matching cost must be <= 4000 (16-bit path costs)");
   CheckOption(p2_gradient_alpha >= 0 && p2_gradient_alpha <= 100000, "SgmOptions.p2_gradient_alpha",
               p2_gradient_alpha, "must be in [0, 100000] (0 = constant P2)");
-  CheckOption(uniqueness_ratio >= 0 && uniqueness_ratio <= 99, "SgmOptions.uniqueness_ratio", uniqueness_ratio,
-              "must be in [0, 99] percent");
-  CheckOption(lr_max_diff >= -1, "SgmOptions.lr_max_diff", lr_max_diff, "must be >= -1 (-1 = no check)");
-  CheckOption(speckle_window >= 0, "SgmOptions.speckle_window", speckle_window, "must be >= 0 (0 = off)");
-  CheckOption(speckle_range >= 0 && speckle_range <= 1000, "SgmOptions.speckle_range", speckle_range,
-              "must be in [0, 1000] px");
+  CheckOption(uniqueness_ratio >= 0 && uniqueness_ratio <= 99, "SgmOptions.uniqueness_ratio",
+              uniqueness_ratio, "must be in [0, 99] percent");
+  CheckOption(lr_max_diff >= -1, "SgmOptions.lr_max_diff", lr_max_diff,
+              "must be >= -1 (-1 = no check)");
+  CheckOption(speckle_window >= 0, "SgmOptions.speckle_window", speckle_window,
+              "must be >= 0 (0 = off)");
+  CheckOption(speckle_range >= 0 && speckle_range <= 1000, "SgmOptions.speckle_range",
+              speckle_range, "must be in [0, 1000] px");
 }
 
 nlohmann::json SgmOptions::ToJson() const {
@@ -92,7 +97,9 @@ namespace detail {
 
 namespace {
 // Rounded num / den (den > 0), halves away from zero.
-int RoundDivide(int num, int den) { return num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den); }
+int RoundDivide(int num, int den) {
+  return num >= 0 ? (num + den / 2) / den : -((-num + den / 2) / den);
+}
 }  // namespace
 
 int SubpixelOffset(int mode, int c0, int c1, int c2) {
@@ -163,7 +170,8 @@ struct SgmMatcher::Scratch {
   cv::Mat fixed, filtered, speckle_buffer;
 };
 
-SgmMatcher::SgmMatcher(const SgmOptions& options) : options_(options), scratch_(std::make_unique<Scratch>()) {
+SgmMatcher::SgmMatcher(const SgmOptions& options)
+    : options_(options), scratch_(std::make_unique<Scratch>()) {
   options_.Check();
 }
 
@@ -183,8 +191,9 @@ nlohmann::json SgmMatcher::Settings() const {
 SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right_input) {
   if (left_input.empty() || right_input.empty()) throw InputError("sgm: input image is empty");
   if (left_input.size() != right_input.size()) {
-    throw InputError(fmt::format("sgm: left image is {}x{} but right image is {}x{}", left_input.cols,
-                                 left_input.rows, right_input.cols, right_input.rows));
+    throw InputError(fmt::format("sgm: left image is {}x{} but right image is {}x{}",
+                                 left_input.cols, left_input.rows, right_input.cols,
+                                 right_input.rows));
   }
   cv::Mat left = ToGray8(left_input), right = ToGray8(right_input);
   if (!left.isContinuous()) left = left.clone();
@@ -199,12 +208,15 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   s.census_left.resize(pixels);
   s.census_right.resize(pixels);
   detail::ParallelRanges(h, threads, [&](int begin, int end) {
-    detail::CensusTransform(left, o.census_width, o.census_height, begin, end, s.census_left.data());
-    detail::CensusTransform(right, o.census_width, o.census_height, begin, end, s.census_right.data());
+    detail::CensusTransform(left, o.census_width, o.census_height, begin, end,
+                            s.census_left.data());
+    detail::CensusTransform(right, o.census_width, o.census_height, begin, end,
+                            s.census_right.data());
   });
 
-  // Stages 2-4: matching cost and path aggregation (costs are computed on the fly per pixel inside the
-  // sweeps), then winner-takes-all, uniqueness, subpixel and left-right check per row as soon as it is final.
+  // Stages 2-4: matching cost and path aggregation (costs are computed on the fly per pixel inside
+  // the sweeps), then winner-takes-all, uniqueness, subpixel and left-right check per row as soon
+  // as it is final.
   detail::AggregationInput input;
   input.cost.width = w;
   input.cost.height = h;
@@ -248,8 +260,10 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
     float* confidence = result.confidence.ptr<float>(y);
     int16_t* fixed = s.fixed.ptr<int16_t>(y);
     for (int x = 0; x < w; ++x) {
-      right_out[x] = row.right_best[x] < 0 ? kInvalidDisparity : static_cast<float>(dmin + row.right_best[x]);
-      // No disparity of the range maps into the right image: x - dmin - k in [0, w) has no solution k.
+      right_out[x] =
+          row.right_best[x] < 0 ? kInvalidDisparity : static_cast<float>(dmin + row.right_best[x]);
+      // No disparity of the range maps into the right image: x - dmin - k in [0, w) has no solution
+      // k.
       if (x - dmin < 0 || x - dmin - (num - 1) >= w) {
         raw[x] = kInvalidDisparity;
         reason[x] = static_cast<uint8_t>(SgmInvalid::kNoCandidate);
@@ -261,12 +275,16 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
       const int best_cost = row.best_cost[x], second = row.second_cost[x];
       const uint16_t* costs = sum_row + static_cast<size_t>(x) * s.sum.padded;
       int offset = 0;
-      if (best > 0 && best < num - 1) offset = detail::SubpixelOffset(subpixel, costs[best - 1], best_cost, costs[best + 1]);
+      if (best > 0 && best < num - 1)
+        offset = detail::SubpixelOffset(subpixel, costs[best - 1], best_cost, costs[best + 1]);
       const int value = (dmin + best) * kSgmSubpixelScale + offset;
       raw[x] = static_cast<float>(value) / kSgmSubpixelScale;
-      confidence[x] = second == 0xFFFF ? 1.0f : (second > 0 ? 1.0f - static_cast<float>(best_cost) / second : 0.0f);
+      confidence[x] = second == 0xFFFF
+                          ? 1.0f
+                          : (second > 0 ? 1.0f - static_cast<float>(best_cost) / second : 0.0f);
       SgmInvalid why = SgmInvalid::kValid;
-      if (static_cast<int64_t>(second) * (100 - o.uniqueness_ratio) < static_cast<int64_t>(best_cost) * 100) {
+      if (static_cast<int64_t>(second) * (100 - o.uniqueness_ratio) <
+          static_cast<int64_t>(best_cost) * 100) {
         why = SgmInvalid::kUniqueness;
       } else if (o.lr_max_diff >= 0 &&
                  !detail::LeftRightConsistent(x, best, row.right_best, w, dmin, o.lr_max_diff)) {
@@ -282,7 +300,8 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   if (o.speckle_window > 0) {
     s.filtered = s.fixed.clone();
     cv::filterSpeckles(s.filtered, detail::kSgmInvalidFixed, o.speckle_window,
-                       static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)), s.speckle_buffer);
+                       static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)),
+                       s.speckle_buffer);
     for (int y = 0; y < h; ++y) {
       const int16_t* before = s.fixed.ptr<int16_t>(y);
       const int16_t* after = s.filtered.ptr<int16_t>(y);
@@ -299,8 +318,9 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   // Stage 6: 3×3 median over valid neighbours.
   if (o.median) {
     s.filtered.create(h, w, CV_16SC1);
-    detail::ParallelRanges(h, threads,
-                           [&](int begin, int end) { detail::MedianValid3x3(s.fixed, s.filtered, begin, end); });
+    detail::ParallelRanges(h, threads, [&](int begin, int end) {
+      detail::MedianValid3x3(s.fixed, s.filtered, begin, end);
+    });
     std::swap(s.fixed, s.filtered);
   }
 
@@ -309,8 +329,9 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
     const int16_t* fixed = s.fixed.ptr<int16_t>(y);
     float* out = result.disparity.ptr<float>(y);
     for (int x = 0; x < w; ++x) {
-      out[x] = fixed[x] == detail::kSgmInvalidFixed ? kInvalidDisparity
-                                                     : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
+      out[x] = fixed[x] == detail::kSgmInvalidFixed
+                   ? kInvalidDisparity
+                   : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
     }
   }
   return result;
@@ -343,7 +364,8 @@ SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params) 
   return o;
 }
 
-std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options, MatcherParams& params) {
+std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options,
+                                                MatcherParams& params) {
   return std::make_unique<SgmMatcher>(ReadSgmOptions(options, params));
 }
 

@@ -1,13 +1,16 @@
-// Our own semi-global matcher (Hirschmüller, PAMI 2008) as a pipeline of named stages (CONVENTIONS.md §4):
+// Our own semi-global matcher (Hirschmüller, PAMI 2008) as a pipeline of named stages
+// (CONVENTIONS.md §4):
 //
-//   census (window W×H, 64-bit codes) → matching cost (Hamming, optionally + truncated Birchfield–Tomasi)
-//   → aggregate paths (4 or 8 directions, P1 / gradient-adapted P2, uint16 path costs summed into one volume)
-//   → winner-takes-all with uniqueness ratio → subpixel (equiangular or parabola)
-//   → left-right consistency (right disparity from the same aggregated volume) → speckle filter → median 3×3.
+//   census (window W×H, 64-bit codes) → matching cost (Hamming, optionally + truncated
+//   Birchfield–Tomasi) → aggregate paths (4 or 8 directions, P1 / gradient-adapted P2, uint16 path
+//   costs summed into one volume) → winner-takes-all with uniqueness ratio → subpixel (equiangular
+//   or parabola) → left-right consistency (right disparity from the same aggregated volume) →
+//   speckle filter → median 3×3.
 //
-// Every stage is a free function in linesight::detail (sgm_stages.h); the matcher owns the scratch buffers and
-// reuses them between frames. The result is bit-identical for any thread count and any SIMD target (Highway
-// runtime dispatch); tests compare every optimised stage with a naive scalar reference.
+// Every stage is a free function in linesight::detail (sgm_stages.h); the matcher owns the scratch
+// buffers and reuses them between frames. The result is bit-identical for any thread count and any
+// SIMD target (Highway runtime dispatch); tests compare every optimised stage with a naive scalar
+// reference.
 #pragma once
 
 #include <cstdint>
@@ -35,39 +38,43 @@ struct SgmOptions {
   // --- disparity range and threads (taken from MatcherOptions by the factory) ---
   int min_disparity = 0;     // smallest disparity searched (px); any value, may be negative
   int num_disparities = 64;  // number of disparities searched (px); any value in [1, 1024]
-  int threads = 0;           // worker threads; 0 = all hardware threads. Results do not depend on it.
+  int threads = 0;  // worker threads; 0 = all hardware threads. Results do not depend on it.
 
   // --- matching cost ---
   int census_width = 9;   // census window width (px, odd, 1..15); width*height - 1 <= 64 bits
   int census_height = 7;  // census window height (px, odd, 1..15)
-  // Weight of the truncated Birchfield–Tomasi term added to the census Hamming distance, in eighths of a cost
-  // unit per grey level: cost = hamming + (bt_weight * min(BT, bt_truncation)) / 8. 0 = census only.
+  // Weight of the truncated Birchfield–Tomasi term added to the census Hamming distance, in eighths
+  // of a cost unit per grey level: cost = hamming + (bt_weight * min(BT, bt_truncation)) / 8. 0 =
+  // census only.
   int bt_weight = 0;
   int bt_truncation = 20;  // grey levels at which the BT term saturates (1..255)
 
   // --- path aggregation ---
   int num_paths = 8;  // 4 (horizontal + vertical) or 8 (plus the diagonals)
-  // Defaults chosen once for all scenes on Middlebury 2001/2003 (bad-1 nonocc) and checked on 2005/2006 half
-  // size (bad-2 nonocc); see the README. With census 9×7 (62 bits), p2 <= 192 keeps path costs in uint8 (fast).
-  int p1 = 28;        // penalty for a disparity change of ±1 px along a path (cost units)
-  int p2 = 100;       // penalty for a larger disparity change (cost units), > p1
-  // P2 adapted to the intensity step |ΔI| between a pixel and its predecessor on the path (grey levels):
-  // P2' = max(p1 + 1, p2 * alpha / (alpha + |ΔI|)) in integer arithmetic, so depth discontinuities, which
-  // usually coincide with intensity edges, are cheaper. 0 = constant P2.
+  // Defaults chosen once for all scenes on Middlebury 2001/2003 (bad-1 nonocc) and checked on
+  // 2005/2006 half size (bad-2 nonocc); see the README. With census 9×7 (62 bits), p2 <= 192 keeps
+  // path costs in uint8 (fast).
+  int p1 = 28;   // penalty for a disparity change of ±1 px along a path (cost units)
+  int p2 = 100;  // penalty for a larger disparity change (cost units), > p1
+  // P2 adapted to the intensity step |ΔI| between a pixel and its predecessor on the path (grey
+  // levels): P2' = max(p1 + 1, p2 * alpha / (alpha + |ΔI|)) in integer arithmetic, so depth
+  // discontinuities, which usually coincide with intensity edges, are cheaper. 0 = constant P2.
   int p2_gradient_alpha = 30;
 
   // --- winner-takes-all and post-processing ---
-  // Uniqueness ratio (percent): the winner is rejected when some disparity more than 1 px away has an
-  // aggregated cost below best * 100 / (100 - uniqueness_ratio). 0 = off (the default: on the dense
-  // Middlebury metrics the density it costs outweighs the errors it removes; the left-right check does more).
+  // Uniqueness ratio (percent): the winner is rejected when some disparity more than 1 px away has
+  // an aggregated cost below best * 100 / (100 - uniqueness_ratio). 0 = off (the default: on the
+  // dense Middlebury metrics the density it costs outweighs the errors it removes; the left-right
+  // check does more).
   int uniqueness_ratio = 0;
   SgmSubpixel subpixel = SgmSubpixel::kEquiangular;
-  // Largest allowed |d_left(x) - d_right(x - d_left(x))| between the integer left and right winners (px);
-  // -1 = no left-right check.
+  // Largest allowed |d_left(x) - d_right(x - d_left(x))| between the integer left and right winners
+  // (px); -1 = no left-right check.
   int lr_max_diff = 2;
-  int speckle_window = 100;     // largest blob (px) of similar disparities removed as a speckle; 0 = off
-  double speckle_range = 2.0;   // largest disparity step (px) inside one speckle blob
-  bool median = true;           // 3×3 median over valid neighbours of each valid pixel
+  int speckle_window =
+      100;  // largest blob (px) of similar disparities removed as a speckle; 0 = off
+  double speckle_range = 2.0;  // largest disparity step (px) inside one speckle blob
+  bool median = true;          // 3×3 median over valid neighbours of each valid pixel
 
   void Check() const;
   nlohmann::json ToJson() const;
@@ -83,12 +90,14 @@ enum class SgmInvalid : uint8_t {
 };
 
 struct SgmResult {
-  cv::Mat disparity;           // CV_32FC1, final output (px, +inf invalid), what StereoMatcher::Compute returns
-  cv::Mat raw_disparity;       // CV_32FC1, subpixel WTA of every pixel before uniqueness / LR / speckle /
-                               // median (+inf only for kNoCandidate)
-  cv::Mat right_disparity;     // CV_32FC1, integer WTA of the right view from the same volume (+inf: none)
-  cv::Mat invalid_reason;      // CV_8UC1, SgmInvalid per pixel of `disparity`
-  cv::Mat min_cost;            // CV_16UC1, aggregated cost of the winner
+  cv::Mat
+      disparity;  // CV_32FC1, final output (px, +inf invalid), what StereoMatcher::Compute returns
+  cv::Mat raw_disparity;  // CV_32FC1, subpixel WTA of every pixel before uniqueness / LR / speckle
+                          // / median (+inf only for kNoCandidate)
+  cv::Mat
+      right_disparity;  // CV_32FC1, integer WTA of the right view from the same volume (+inf: none)
+  cv::Mat invalid_reason;  // CV_8UC1, SgmInvalid per pixel of `disparity`
+  cv::Mat min_cost;        // CV_16UC1, aggregated cost of the winner
   // CV_32FC1 in [0, 1]: 1 - best / (best cost more than 1 px from the winner); 0 when ambiguous.
   cv::Mat confidence;
 };
@@ -114,13 +123,15 @@ class SgmMatcher final : public StereoMatcher {
   std::unique_ptr<Scratch> scratch_;
 };
 
-// Reads SgmOptions from MatcherOptions (range, threads) and its --param keys: census_width, census_height,
-// bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel (none|equiangular|parabola),
-// lr_max_diff, speckle_window, speckle_range, median. Throws OptionError for invalid values.
+// Reads SgmOptions from MatcherOptions (range, threads) and its --param keys: census_width,
+// census_height, bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel
+// (none|equiangular|parabola), lr_max_diff, speckle_window, speckle_range, median. Throws
+// OptionError for invalid values.
 SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params);
 
 // Factory hook used by CreateMatcher("sgm", ...).
-std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options, MatcherParams& params);
+std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options,
+                                                MatcherParams& params);
 
 // Name of the SIMD target Highway dispatches the SGM kernels to on this machine (e.g. "AVX3_DL").
 std::string SgmSimdTarget();

@@ -1,5 +1,6 @@
-// Per-kernel microbenchmarks of the SGM pipeline (CONVENTIONS.md §12); end-to-end throughput against OpenCV
-// is `linesight bench`. Arguments: width, height, disparities. Items processed = W·H·D disparity evaluations.
+// Per-kernel microbenchmarks of the SGM pipeline (CONVENTIONS.md §12); end-to-end throughput
+// against OpenCV is `linesight bench`. Arguments: width, height, disparities. Items processed =
+// W·H·D disparity evaluations.
 #include <benchmark/benchmark.h>
 #include <opencv2/core.hpp>
 
@@ -52,11 +53,13 @@ void BM_Census(benchmark::State& state) {
 BENCHMARK(BM_Census)->Args({752, 480, 1})->Unit(benchmark::kMillisecond);
 
 void BM_MatchingCost(benchmark::State& state) {
-  Fixture f(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), static_cast<int>(state.range(2)));
+  Fixture f(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+            static_cast<int>(state.range(2)));
   std::vector<uint16_t> row(static_cast<size_t>(f.input.cost.width) *
                             detail::PaddedDisparities(f.input.cost.num_disparities));
   for (auto _ : state) {
-    for (int y = 0; y < f.input.cost.height; ++y) detail::MatchingCostRow(f.input.cost, y, row.data());
+    for (int y = 0; y < f.input.cost.height; ++y)
+      detail::MatchingCostRow(f.input.cost, y, row.data());
     benchmark::DoNotOptimize(row.data());
   }
   SetItems(state);
@@ -64,7 +67,8 @@ void BM_MatchingCost(benchmark::State& state) {
 BENCHMARK(BM_MatchingCost)->Args({752, 480, 128})->Unit(benchmark::kMillisecond);
 
 void BM_AggregatePaths(benchmark::State& state) {
-  Fixture f(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), static_cast<int>(state.range(2)));
+  Fixture f(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+            static_cast<int>(state.range(2)));
   f.input.num_paths = static_cast<int>(state.range(3));
   detail::SumVolume sum;
   detail::SweepScratch forward, backward;
@@ -89,15 +93,17 @@ void BM_WinnerTakesAll(benchmark::State& state) {
   detail::SweepScratch forward, backward;
   detail::AlignedVector<uint16_t> sum(static_cast<size_t>(w) * h * detail::PaddedDisparities(num));
   const size_t row_lanes = static_cast<size_t>(w) * detail::PaddedDisparities(num);
-  detail::AggregatePaths(f.input, 2, &partial, &forward, &backward, [&](int y, const uint16_t* row) {
-    std::copy(row, row + row_lanes, sum.begin() + static_cast<ptrdiff_t>(y * row_lanes));
-  });
+  detail::AggregatePaths(
+      f.input, 2, &partial, &forward, &backward, [&](int y, const uint16_t* row) {
+        std::copy(row, row + row_lanes, sum.begin() + static_cast<ptrdiff_t>(y * row_lanes));
+      });
   std::vector<int16_t> best(w), right_best(w);
   std::vector<uint16_t> best_cost(w), second(w), scratch(detail::WtaScratchSize(w, num));
   for (auto _ : state) {
     for (int y = 0; y < h; ++y) {
       detail::WinnerTakesAllRow(sum.data() + y * row_lanes, w, num, 0,
-                                {best.data(), best_cost.data(), second.data(), right_best.data()}, scratch.data());
+                                {best.data(), best_cost.data(), second.data(), right_best.data()},
+                                scratch.data());
     }
     benchmark::DoNotOptimize(best.data());
   }
@@ -122,7 +128,8 @@ BENCHMARK(BM_SgmEndToEnd)->Args({752, 480, 128})->UseRealTime()->Unit(benchmark:
 namespace linesight {
 namespace {
 
-// OpenCV baselines at the same size, for orientation (the official comparison is `linesight bench`).
+// OpenCV baselines at the same size, for orientation (the official comparison is `linesight
+// bench`).
 void BM_OpenCvSgbm(benchmark::State& state) {
   const int w = static_cast<int>(state.range(0)), h = static_cast<int>(state.range(1));
   Fixture f(w, h, 1);

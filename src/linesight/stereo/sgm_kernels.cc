@@ -1,6 +1,7 @@
-// SIMD kernels of the SGM pipeline, compiled once per Highway target (foreach_target) and dispatched at run
-// time. Every kernel is defined in integers only, so all targets produce bit-identical results;
-// sgm_reference_test.cc checks each against a naive scalar reference for every target the CPU supports.
+// SIMD kernels of the SGM pipeline, compiled once per Highway target (foreach_target) and
+// dispatched at run time. Every kernel is defined in integers only, so all targets produce
+// bit-identical results; sgm_reference_test.cc checks each against a naive scalar reference for
+// every target the CPU supports.
 
 #include <algorithm>
 #include <cstring>
@@ -11,8 +12,8 @@
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "linesight/stereo/sgm_kernels.cc"
-#include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/cache_control.h>
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
 HWY_BEFORE_NAMESPACE();
@@ -22,9 +23,10 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 const char* TargetNameImpl() { return hwy::TargetName(HWY_TARGET); }
 
-// ------------------------------------------------------------------------------------------------ census
-// `padded`: rows [row_begin - ry, row_end + ry) of the image with rx replicated columns on each side and at
-// least one vector of slack after them; row r of the image is padded row r - (row_begin - ry).
+// ------------------------------------------------------------------------------------------------
+// census `padded`: rows [row_begin - ry, row_end + ry) of the image with rx replicated columns on
+// each side and at least one vector of slack after them; row r of the image is padded row r -
+// (row_begin - ry).
 void CensusRowsImpl(const uint8_t* padded, size_t stride, int width, const int* offset_dy,
                     const int* offset_dx, int num_bits, int rx, int ry, int row_begin, int row_end,
                     uint8_t* planes /* 8 x stride */, uint64_t* codes) {
@@ -40,9 +42,10 @@ void CensusRowsImpl(const uint8_t* padded, size_t stride, int width, const int* 
         auto acc = zero;
         for (int bit = 0; bit < 8 && g * 8 + bit < num_bits; ++bit) {
           const int b = g * 8 + bit;
-          const auto neighbour =
-              hn::LoadU(d8, centre_row + static_cast<ptrdiff_t>(offset_dy[b]) * static_cast<ptrdiff_t>(stride) +
-                                x0 + offset_dx[b]);
+          const auto neighbour = hn::LoadU(
+              d8, centre_row +
+                      static_cast<ptrdiff_t>(offset_dy[b]) * static_cast<ptrdiff_t>(stride) + x0 +
+                      offset_dx[b]);
           acc = hn::Or(acc, hn::IfThenElseZero(hn::Lt(neighbour, centre),
                                                hn::Set(d8, static_cast<uint8_t>(1u << bit))));
         }
@@ -60,9 +63,10 @@ void CensusRowsImpl(const uint8_t* padded, size_t stride, int width, const int* 
   }
 }
 
-// ------------------------------------------------------------------------------------------ matching cost
-// Per-row context of the matching cost: the right census and BT values stored in reverse, so that for a left
-// pixel x the right pixels x - min_disparity - k for k = 0, 1, ... are contiguous from index width-1-x.
+// ------------------------------------------------------------------------------------------
+// matching cost Per-row context of the matching cost: the right census and BT values stored in
+// reverse, so that for a left pixel x the right pixels x - min_disparity - k for k = 0, 1, ... are
+// contiguous from index width-1-x.
 struct CostRowContext {
   const CostInput* input = nullptr;
   int padded = 0;
@@ -79,9 +83,9 @@ inline size_t ReversedSize(const CostInput& in, int padded) {
   return static_cast<size_t>(in.width) + padded + 64;
 }
 
-void PrepareCostRow(const CostInput& in, int y, int padded, AlignedVector<uint64_t>* census_reversed,
-                    AlignedVector<uint16_t>* bt_reversed, AlignedVector<uint16_t>* bt_left,
-                    CostRowContext* ctx) {
+void PrepareCostRow(const CostInput& in, int y, int padded,
+                    AlignedVector<uint64_t>* census_reversed, AlignedVector<uint16_t>* bt_reversed,
+                    AlignedVector<uint16_t>* bt_left, CostRowContext* ctx) {
   const int w = in.width;
   const size_t n = ReversedSize(in, padded);
   census_reversed->assign(n, 0);
@@ -97,7 +101,8 @@ void PrepareCostRow(const CostInput& in, int y, int padded, AlignedVector<uint64
   ctx->census_reversed = census_reversed->data();
   ctx->reversed_size = n;
   if (in.bt_weight > 0) {
-    // Birchfield–Tomasi in half grey levels: 2I and the min / max of 2I and the two half-pixel interpolations.
+    // Birchfield–Tomasi in half grey levels: 2I and the min / max of 2I and the two half-pixel
+    // interpolations.
     auto fill = [w](const uint8_t* row, int x, uint16_t* i2, uint16_t* mn, uint16_t* mx) {
       const int c = row[x];
       const int minus = c + row[std::max(x - 1, 0)];
@@ -145,24 +150,26 @@ HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, T* HWY_RESTRICT out)
   }
   if constexpr (sizeof(T) == 2) {
     if (in.bt_weight > 0) {
-    const hn::ScalableTag<uint16_t> d16;
-    const size_t n16 = hn::Lanes(d16);
-    const size_t n = ctx.reversed_size;
-    const auto il = hn::Set(d16, ctx.bt_left[x]);
-    const auto il_min = hn::Set(d16, ctx.bt_left[in.width + x]);
-    const auto il_max = hn::Set(d16, ctx.bt_left[2 * in.width + x]);
-    const auto truncation = hn::Set(d16, static_cast<uint16_t>(2 * in.bt_truncation));
-    const auto weight = hn::Set(d16, static_cast<uint16_t>(in.bt_weight));
-    for (int k = 0; k < padded; k += static_cast<int>(n16)) {
-      const auto ir = hn::LoadU(d16, ctx.bt_reversed + base + k);
-      const auto ir_min = hn::LoadU(d16, ctx.bt_reversed + n + base + k);
-      const auto ir_max = hn::LoadU(d16, ctx.bt_reversed + 2 * n + base + k);
-      const auto left_to_right = hn::Max(hn::SaturatedSub(il, ir_max), hn::SaturatedSub(ir_min, il));
-      const auto right_to_left = hn::Max(hn::SaturatedSub(ir, il_max), hn::SaturatedSub(il_min, ir));
-      const auto bt = hn::Min(hn::Min(left_to_right, right_to_left), truncation);
-      const auto term = hn::ShiftRight<4>(hn::Mul(bt, weight));
-      hn::StoreU(hn::Add(hn::LoadU(d16, out + k), term), d16, out + k);
-    }
+      const hn::ScalableTag<uint16_t> d16;
+      const size_t n16 = hn::Lanes(d16);
+      const size_t n = ctx.reversed_size;
+      const auto il = hn::Set(d16, ctx.bt_left[x]);
+      const auto il_min = hn::Set(d16, ctx.bt_left[in.width + x]);
+      const auto il_max = hn::Set(d16, ctx.bt_left[2 * in.width + x]);
+      const auto truncation = hn::Set(d16, static_cast<uint16_t>(2 * in.bt_truncation));
+      const auto weight = hn::Set(d16, static_cast<uint16_t>(in.bt_weight));
+      for (int k = 0; k < padded; k += static_cast<int>(n16)) {
+        const auto ir = hn::LoadU(d16, ctx.bt_reversed + base + k);
+        const auto ir_min = hn::LoadU(d16, ctx.bt_reversed + n + base + k);
+        const auto ir_max = hn::LoadU(d16, ctx.bt_reversed + 2 * n + base + k);
+        const auto left_to_right =
+            hn::Max(hn::SaturatedSub(il, ir_max), hn::SaturatedSub(ir_min, il));
+        const auto right_to_left =
+            hn::Max(hn::SaturatedSub(ir, il_max), hn::SaturatedSub(il_min, ir));
+        const auto bt = hn::Min(hn::Min(left_to_right, right_to_left), truncation);
+        const auto term = hn::ShiftRight<4>(hn::Mul(bt, weight));
+        hn::StoreU(hn::Add(hn::LoadU(d16, out + k), term), d16, out + k);
+      }
     }
   }
   // Disparities whose right pixel leaves the image: x - min_disparity - k < 0 or >= width.
@@ -180,22 +187,25 @@ void MatchingCostRowImpl(const CostInput& in, int y, uint16_t* out) {
   AlignedVector<uint16_t> bt_reversed, bt_left;
   CostRowContext ctx;
   PrepareCostRow(in, y, padded, &census_reversed, &bt_reversed, &bt_left, &ctx);
-  for (int x = 0; x < in.width; ++x) PixelCost<uint16_t>(ctx, x, out + static_cast<size_t>(x) * padded);
+  for (int x = 0; x < in.width; ++x)
+    PixelCost<uint16_t>(ctx, x, out + static_cast<size_t>(x) * padded);
 }
 
-// ------------------------------------------------------------------------------------------ aggregation
-// Path costs are uint8 when MaxMatchingCost + P2 <= 255 (census without BT and P2 <= 191: twice the lanes per
-// vector), uint16 otherwise. Either way every path cost stays below its sentinel and results are identical.
+// ------------------------------------------------------------------------------------------
+// aggregation Path costs are uint8 when MaxMatchingCost + P2 <= 255 (census without BT and P2 <=
+// 191: twice the lanes per vector), uint16 otherwise. Either way every path cost stays below its
+// sentinel and results are identical.
 template <typename T>
 constexpr T PathSentinel() {
   return sizeof(T) == 1 ? T{0xFF} : static_cast<T>(kSgmPathSentinel);
 }
 
-// Path buffers of one sweep: for each of the three paths that come from the previous row (vertical, diagonal,
-// anti-diagonal) two rows (by parity of the sweep step) of `width` slots, plus two slots of the horizontal
-// path. Slot s occupies [s * slot, (s + 1) * slot): kSgmLaneAlign guard lanes, then `padded` data lanes; the
-// guard of the next slot (or the trailing guard) follows the data. After the slots: per-path minima (6 rows of
-// width), the horizontal minima, the pixel's costs, and an all-zero slot for the first pixel of each path.
+// Path buffers of one sweep: for each of the three paths that come from the previous row (vertical,
+// diagonal, anti-diagonal) two rows (by parity of the sweep step) of `width` slots, plus two slots
+// of the horizontal path. Slot s occupies [s * slot, (s + 1) * slot): kSgmLaneAlign guard lanes,
+// then `padded` data lanes; the guard of the next slot (or the trailing guard) follows the data.
+// After the slots: per-path minima (6 rows of width), the horizontal minima, the pixel's costs, and
+// an all-zero slot for the first pixel of each path.
 struct SweepLayout {
   int width = 0;
   int padded = 0;
@@ -203,9 +213,13 @@ struct SweepLayout {
   size_t RowBuffer(int path, int parity) const {
     return (static_cast<size_t>(path) * 2 + parity) * width * slot;
   }
-  size_t Horizontal(int parity) const { return 6 * static_cast<size_t>(width) * slot + parity * slot; }
+  size_t Horizontal(int parity) const {
+    return 6 * static_cast<size_t>(width) * slot + parity * slot;
+  }
   size_t Slots() const { return 6 * static_cast<size_t>(width) * slot + 2 * slot + kSgmLaneAlign; }
-  size_t Minima(int path, int parity) const { return Slots() + (static_cast<size_t>(path) * 2 + parity) * width; }
+  size_t Minima(int path, int parity) const {
+    return Slots() + (static_cast<size_t>(path) * 2 + parity) * width;
+  }
   size_t HorizontalMinima() const { return Slots() + 6 * static_cast<size_t>(width); }
   size_t Cost() const { return HorizontalMinima() + kSgmLaneAlign; }
   size_t ZeroSlot() const { return Cost() + padded + kSgmLaneAlign; }
@@ -220,13 +234,14 @@ SweepLayout MakeLayout(int width, int num_disparities) {
   return layout;
 }
 
-// Previous-pixel state of one path for the current pixel. A path that starts at this pixel reads the all-zero
-// slot with prev_min 0, for which the recurrence reduces to L = C.
+// Previous-pixel state of one path for the current pixel. A path that starts at this pixel reads
+// the all-zero slot with prev_min 0, for which the recurrence reduces to L = C.
 template <typename T>
 struct PathStep {
   const T* prev = nullptr;  // data lanes of the predecessor's L
   T prev_min = 0;
-  T jump = 0;  // prev_min + P2', saturated to T (harmless: the minimum never exceeds the largest path cost)
+  T jump = 0;  // prev_min + P2', saturated to T (harmless: the minimum never exceeds the largest
+               // path cost)
   T* cur = nullptr;
   T* cur_min = nullptr;
 };
@@ -244,7 +259,8 @@ HWY_INLINE hn::TFromD<D> SmallestLane(D d, V v) {
   }
 }
 
-// Adds the uint16 lanes of the path-cost vector l (of T) into acc0 (and acc1 for the upper half of uint8).
+// Adds the uint16 lanes of the path-cost vector l (of T) into acc0 (and acc1 for the upper half of
+// uint8).
 template <class D, class DW, class V, class VW>
 HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
 #if HWY_TARGET != HWY_SCALAR
@@ -262,17 +278,18 @@ HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
   }
 }
 
-// One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and either streams
-// their sum into `partial` (first sweep over this row) or adds the other sweep's partial sum and writes the final
-// S into `total`.
+// One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and
+// either streams their sum into `partial` (first sweep over this row) or adds the other sweep's
+// partial sum and writes the final S into `total`.
 template <typename T, int kPaths, bool kAdd>
-HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* steps, int full_chunks_end,
-                               int padded, size_t tail_valid_first, T p1, uint16_t* HWY_RESTRICT partial,
-                               uint16_t* HWY_RESTRICT total) {
+HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* steps,
+                               int full_chunks_end, int padded, size_t tail_valid_first, T p1,
+                               uint16_t* HWY_RESTRICT partial, uint16_t* HWY_RESTRICT total) {
   const hn::ScalableTag<T> d;
   using V = hn::Vec<decltype(d)>;
   // Sum lanes: uint16 covering the same disparities as one vector of T.
-  using DW = std::conditional_t<sizeof(T) == 1, hn::Rebind<uint16_t, hn::Half<decltype(d)>>, decltype(d)>;
+  using DW =
+      std::conditional_t<sizeof(T) == 1, hn::Rebind<uint16_t, hn::Half<decltype(d)>>, decltype(d)>;
   const DW dw;
   using VW = hn::Vec<DW>;
   const int n = static_cast<int>(hn::Lanes(d));
@@ -306,7 +323,8 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
     }
     if (kAdd) {
       hn::StoreU(hn::Add(acc0, hn::Load(dw, partial + k)), dw, total + k);
-      if (sizeof(T) == 1) hn::StoreU(hn::Add(acc1, hn::Load(dw, partial + k + nw)), dw, total + k + nw);
+      if (sizeof(T) == 1)
+        hn::StoreU(hn::Add(acc1, hn::Load(dw, partial + k + nw)), dw, total + k + nw);
     } else {
       hn::Stream(acc0, dw, partial + k);  // read by the other sweep much later: bypass the caches
       if (sizeof(T) == 1) hn::Stream(acc1, dw, partial + k + nw);
@@ -318,11 +336,13 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
   for (int p = 0; p < kPaths; ++p) *steps[p].cur_min = SmallestLane(d, minima[p]);
 }
 
-// Sweep steps [step_begin, step_end): step t is row t (forward) or row height-1-t (backward). Forward paths come
-// from the left, top, top-left and top-right; backward paths from the right, bottom, bottom-right, bottom-left.
+// Sweep steps [step_begin, step_end): step t is row t (forward) or row height-1-t (backward).
+// Forward paths come from the left, top, top-left and top-right; backward paths from the right,
+// bottom, bottom-right, bottom-left.
 template <typename T, int kPaths, bool kAdd>
-void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end, const uint16_t* p2_table,
-                SumVolume* sum, T* base, SweepScratch* scratch, const RowDone* row_done) {
+void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end,
+                const uint16_t* p2_table, SumVolume* sum, T* base, SweepScratch* scratch,
+                const RowDone* row_done) {
   const CostInput& cin = in.cost;
   const int w = cin.width, h = cin.height, num = cin.num_disparities;
   const SweepLayout layout = MakeLayout(w, num);
@@ -337,13 +357,16 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
   const int guard = kSgmLaneAlign;
   const T p1 = static_cast<T>(in.p1);
   constexpr int kMaxT = sizeof(T) == 1 ? 0xFF : 0xFFFF;
-  auto jump = [&](T prev_min, int step) { return static_cast<T>(std::min(kMaxT, prev_min + p2_table[step])); };
+  auto jump = [&](T prev_min, int step) {
+    return static_cast<T>(std::min(kMaxT, prev_min + p2_table[step]));
+  };
   CostRowContext ctx;
   for (int t = step_begin; t < step_end; ++t) {
     const int y = direction > 0 ? t : h - 1 - t;
     const int prev_y = y - direction;
     const int cur_parity = t & 1, prev_parity = 1 - cur_parity;
-    PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed, &scratch->bt_left, &ctx);
+    PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed,
+                   &scratch->bt_left, &ctx);
     const uint8_t* gray = cin.gray_left + static_cast<size_t>(y) * w;
     const uint8_t* gray_prev = t > 0 ? cin.gray_left + static_cast<size_t>(prev_y) * w : nullptr;
     uint16_t* partial_row = sum->Row(y);
@@ -370,15 +393,18 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
           s.prev = zero_slot;
         }
       }
-      // Paths from the previous row: vertical (dx = 0), diagonal (dx = -direction), anti-diagonal (+direction).
+      // Paths from the previous row: vertical (dx = 0), diagonal (dx = -direction), anti-diagonal
+      // (+direction).
       for (int p = 0; p + 1 < kPaths; ++p) {
         const int dx = p == 0 ? 0 : (p == 1 ? -direction : direction);
         PathStep<T>& s = steps[p + 1];
-        s.cur = base + layout.RowBuffer(p, cur_parity) + static_cast<size_t>(x) * layout.slot + guard;
+        s.cur =
+            base + layout.RowBuffer(p, cur_parity) + static_cast<size_t>(x) * layout.slot + guard;
         s.cur_min = base + layout.Minima(p, cur_parity) + x;
         const int px = x + dx;
         if (t > 0 && px >= 0 && px < w) {
-          s.prev = base + layout.RowBuffer(p, prev_parity) + static_cast<size_t>(px) * layout.slot + guard;
+          s.prev = base + layout.RowBuffer(p, prev_parity) + static_cast<size_t>(px) * layout.slot +
+                   guard;
           s.prev_min = base[layout.Minima(p, prev_parity) + px];
           s.jump = jump(s.prev_min, std::abs(gray[x] - gray_prev[px]));
         } else {
@@ -399,7 +425,8 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
 
 template <typename T>
 void SweepTyped(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
-                const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
+                const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch,
+                const RowDone* row_done) {
   const SweepLayout layout = MakeLayout(in.cost.width, in.cost.num_disparities);
   const size_t bytes = layout.Total() * sizeof(T);
   if (step_begin == 0 || scratch->buffers.size() != bytes) {
@@ -412,22 +439,28 @@ void SweepTyped(const AggregationInput& in, int direction, int step_begin, int s
   const bool eight = in.num_paths == 8;
   if (add) {
     if (eight) {
-      SweepSteps<T, 4, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
+      SweepSteps<T, 4, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
+                             row_done);
     } else {
-      SweepSteps<T, 2, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
+      SweepSteps<T, 2, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
+                             row_done);
     }
   } else {
     if (eight) {
-      SweepSteps<T, 4, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
+      SweepSteps<T, 4, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
+                              row_done);
     } else {
-      SweepSteps<T, 2, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
+      SweepSteps<T, 2, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
+                              row_done);
     }
   }
 }
 
 void SweepImpl(const AggregationInput& in, int direction, int step_begin, int step_end, bool add,
-               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch, const RowDone* row_done) {
-  scratch->total_row.resize(static_cast<size_t>(in.cost.width) * PaddedDisparities(in.cost.num_disparities));
+               const uint16_t* p2_table, SumVolume* sum, SweepScratch* scratch,
+               const RowDone* row_done) {
+  scratch->total_row.resize(static_cast<size_t>(in.cost.width) *
+                            PaddedDisparities(in.cost.num_disparities));
 #if HWY_TARGET != HWY_SCALAR  // one lane per vector: nothing to gain from uint8 lanes
   if (UsesNarrowPathCosts(in)) {
     SweepTyped<uint8_t>(in, direction, step_begin, step_end, add, p2_table, sum, scratch, row_done);
@@ -437,9 +470,10 @@ void SweepImpl(const AggregationInput& in, int direction, int step_begin, int st
   SweepTyped<uint16_t>(in, direction, step_begin, step_end, add, p2_table, sum, scratch, row_done);
 }
 
-// ------------------------------------------------------------------------------------- winner-takes-all
-void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_disparities, int min_disparity,
-                           WtaRow out, uint16_t* right_cost_scratch) {
+// -------------------------------------------------------------------------------------
+// winner-takes-all
+void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_disparities,
+                           int min_disparity, WtaRow out, uint16_t* right_cost_scratch) {
   const hn::ScalableTag<uint16_t> d;
   const size_t n = hn::Lanes(d);
   const int padded = PaddedDisparities(num_disparities);
@@ -464,7 +498,8 @@ void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_dispariti
         break;
       }
     }
-    // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are excluded.
+    // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are
+    // excluded.
     const auto low = hn::Set(d, static_cast<uint16_t>(best - 1));
     auto second = all_ones;
     for (int k = 0; k < padded; k += static_cast<int>(n)) {
@@ -486,7 +521,9 @@ void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_dispariti
       const auto old = hn::LoadU(d, rc + k);
       const auto better = hn::Lt(v, old);
       hn::StoreU(hn::Min(v, old), d, rc + k);
-      hn::StoreU(hn::IfThenElse(better, hn::Iota(d, static_cast<uint16_t>(k)), hn::LoadU(d, rb + k)), d, rb + k);
+      hn::StoreU(
+          hn::IfThenElse(better, hn::Iota(d, static_cast<uint16_t>(k)), hn::LoadU(d, rb + k)), d,
+          rb + k);
     }
   }
   for (int xr = 0; xr < width; ++xr) {
@@ -514,8 +551,8 @@ HWY_EXPORT(WinnerTakesAllRowImpl);
 
 std::string DispatchedTargetName() { return HWY_DYNAMIC_DISPATCH(TargetNameImpl)(); }
 
-void CensusTransform(const cv::Mat& gray, int window_width, int window_height, int row_begin, int row_end,
-                     uint64_t* codes) {
+void CensusTransform(const cv::Mat& gray, int window_width, int window_height, int row_begin,
+                     int row_end, uint64_t* codes) {
   LS_CHECK(gray.type() == CV_8UC1);
   LS_CHECK(window_width % 2 == 1 && window_height % 2 == 1);
   LS_CHECK(window_width * window_height - 1 <= 64);
@@ -545,8 +582,8 @@ void CensusTransform(const cv::Mat& gray, int window_width, int window_height, i
   }
   AlignedVector<uint8_t> planes(8 * stride, 0);
   HWY_DYNAMIC_DISPATCH(CensusRowsImpl)
-  (padded.data(), stride, w, offset_dy.data(), offset_dx.data(), static_cast<int>(offset_dy.size()), rx, ry,
-   row_begin, row_end, planes.data(), codes);
+  (padded.data(), stride, w, offset_dy.data(), offset_dx.data(), static_cast<int>(offset_dy.size()),
+   rx, ry, row_begin, row_end, planes.data(), codes);
 }
 
 int MaxMatchingCost(const CostInput& input) {
@@ -569,8 +606,8 @@ void SumVolume::Resize(int w, int h, int d) {
   }
 }
 
-void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, SweepScratch* forward,
-                    SweepScratch* backward, const RowDone& row_done) {
+void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum,
+                    SweepScratch* forward, SweepScratch* backward, const RowDone& row_done) {
   LS_CHECK(input.num_paths == 4 || input.num_paths == 8);
   LS_CHECK(MaxMatchingCost(input.cost) + input.p2 <= kSgmMaxPathCost);
   const int h = input.cost.height;
@@ -579,7 +616,8 @@ void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, 
   for (int g = 0; g < 256; ++g) {
     int p2 = input.p2;
     if (input.p2_gradient_alpha > 0) {
-      p2 = std::max(input.p1 + 1, input.p2 * input.p2_gradient_alpha / (input.p2_gradient_alpha + g));
+      p2 = std::max(input.p1 + 1,
+                    input.p2 * input.p2_gradient_alpha / (input.p2_gradient_alpha + g));
     }
     p2_table[g] = static_cast<uint16_t>(p2);
   }
@@ -590,11 +628,13 @@ void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, 
     sweep(input, -1, 0, h, true, p2_table, sum, backward, done);
     return;
   }
-  // Phase 1: each sweep writes its first half of the rows; phase 2: each adds into the other half, which the
-  // opposite sweep has finished, so every row is final as soon as the second sweep leaves it.
+  // Phase 1: each sweep writes its first half of the rows; phase 2: each adds into the other half,
+  // which the opposite sweep has finished, so every row is final as soon as the second sweep leaves
+  // it.
   const int mid = h / 2;
   {
-    std::thread worker([&] { sweep(input, -1, 0, h - mid, false, p2_table, sum, backward, nullptr); });
+    std::thread worker(
+        [&] { sweep(input, -1, 0, h - mid, false, p2_table, sum, backward, nullptr); });
     sweep(input, +1, 0, mid, false, p2_table, sum, forward, nullptr);
     worker.join();
   }
@@ -605,8 +645,8 @@ void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, 
   }
 }
 
-void WinnerTakesAllRow(const uint16_t* sum_row, int width, int num_disparities, int min_disparity, WtaRow out,
-                       uint16_t* right_cost_scratch) {
+void WinnerTakesAllRow(const uint16_t* sum_row, int width, int num_disparities, int min_disparity,
+                       WtaRow out, uint16_t* right_cost_scratch) {
   HWY_DYNAMIC_DISPATCH(WinnerTakesAllRowImpl)
   (sum_row, width, num_disparities, min_disparity, out, right_cost_scratch);
 }

@@ -1,6 +1,6 @@
-// Naive scalar references of every optimised SGM stage (CONVENTIONS.md §7), and exact comparisons with the
-// SIMD kernels for every Highway target this CPU supports, on awkward sizes, disparity ranges, path counts
-// and thread counts.
+// Naive scalar references of every optimised SGM stage (CONVENTIONS.md §7), and exact comparisons
+// with the SIMD kernels for every Highway target this CPU supports, on awkward sizes, disparity
+// ranges, path counts and thread counts.
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -25,8 +25,9 @@ namespace {
 
 using detail::kSgmInvalidFixed;
 
-// ------------------------------------------------------------------------------------------ test images
-// A textured pair with a slanted disparity plane plus a nearer box, seeded; `width` x `height`.
+// ------------------------------------------------------------------------------------------ test
+// images A textured pair with a slanted disparity plane plus a nearer box, seeded; `width` x
+// `height`.
 void MakePair(int width, int height, double d0, uint64_t seed, cv::Mat* left, cv::Mat* right) {
   cv::RNG rng(seed);
   cv::Mat noise(height / 2 + 2, width / 2 + 40, CV_8UC1);
@@ -45,7 +46,8 @@ void MakePair(int width, int height, double d0, uint64_t seed, cv::Mat* left, cv
   }
 }
 
-// ------------------------------------------------------------------------------------------ references
+// ------------------------------------------------------------------------------------------
+// references
 std::vector<uint64_t> ReferenceCensus(const cv::Mat& gray, int ww, int wh) {
   const int w = gray.cols, h = gray.rows;
   std::vector<uint64_t> codes(static_cast<size_t>(w) * h);
@@ -57,7 +59,8 @@ std::vector<uint64_t> ReferenceCensus(const cv::Mat& gray, int ww, int wh) {
       for (int dy = -wh / 2; dy <= wh / 2; ++dy) {
         for (int dx = -ww / 2; dx <= ww / 2; ++dx) {
           if (dx == 0 && dy == 0) continue;
-          const int v = gray.at<uint8_t>(std::clamp(y + dy, 0, h - 1), std::clamp(x + dx, 0, w - 1));
+          const int v =
+              gray.at<uint8_t>(std::clamp(y + dy, 0, h - 1), std::clamp(x + dx, 0, w - 1));
           if (v < centre) code |= uint64_t{1} << bit;
           ++bit;
         }
@@ -101,9 +104,12 @@ struct Config {
 };
 
 std::string Describe(const Config& c) {
-  return fmt::format("{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} p2={} u={} lr={} subpixel={} census={}x{}",
-                     c.width, c.height, c.min_disparity, c.num_disparities, c.paths, c.threads, c.bt_weight,
-                     c.alpha, c.p2, c.uniqueness, c.lr_max_diff, static_cast<int>(c.subpixel), c.census_width, c.census_height);
+  return fmt::format(
+      "{}x{} dmin={} num={} paths={} threads={} bt={} alpha={} p2={} u={} lr={} subpixel={} "
+      "census={}x{}",
+      c.width, c.height, c.min_disparity, c.num_disparities, c.paths, c.threads, c.bt_weight,
+      c.alpha, c.p2, c.uniqueness, c.lr_max_diff, static_cast<int>(c.subpixel), c.census_width,
+      c.census_height);
 }
 
 SgmOptions OptionsFor(const Config& c) {
@@ -231,16 +237,19 @@ Reference ComputeReference(const Config& c) {
       int16_t& out = fixed.at<int16_t>(y, x);
       out = kSgmInvalidFixed;
       if (x - dmin < 0 || x - dmin - (num - 1) >= w) continue;
-      if (static_cast<int64_t>(r.second[i]) * (100 - o.uniqueness_ratio) < int64_t{r.best_cost[i]} * 100) continue;
+      if (static_cast<int64_t>(r.second[i]) * (100 - o.uniqueness_ratio) <
+          int64_t{r.best_cost[i]} * 100)
+        continue;
       const int xr = x - dmin - best;
       if (xr < 0 || xr >= w) continue;
       const int right = r.right_best[static_cast<size_t>(y) * w + xr];
       if (right < 0 || std::abs(right - best) > o.lr_max_diff) continue;
       double offset = 0;
       if (best > 0 && best < num - 1 && o.subpixel != SgmSubpixel::kNone) {
-        const double c0 = r.sum[at(y, x, best - 1)], c1 = r.sum[at(y, x, best)], c2 = r.sum[at(y, x, best + 1)];
+        const double c0 = r.sum[at(y, x, best - 1)], c1 = r.sum[at(y, x, best)],
+                     c2 = r.sum[at(y, x, best + 1)];
         const double den = o.subpixel == SgmSubpixel::kEquiangular ? 2 * (std::max(c0, c2) - c1)
-                                                                    : 2 * (c0 + c2 - 2 * c1);
+                                                                   : 2 * (c0 + c2 - 2 * c1);
         if (den > 0) offset = std::round((c0 - c2) * kSgmSubpixelScale / den);
       }
       out = static_cast<int16_t>((dmin + best) * kSgmSubpixelScale + static_cast<int>(offset));
@@ -257,7 +266,8 @@ Reference ComputeReference(const Config& c) {
       for (int yy = y - 1; yy <= y + 1; ++yy) {
         for (int xx = x - 1; xx <= x + 1; ++xx) {
           if (yy < 0 || yy >= h || xx < 0 || xx >= w) continue;
-          if (fixed.at<int16_t>(yy, xx) != kSgmInvalidFixed) values.push_back(fixed.at<int16_t>(yy, xx));
+          if (fixed.at<int16_t>(yy, xx) != kSgmInvalidFixed)
+            values.push_back(fixed.at<int16_t>(yy, xx));
         }
       }
       std::sort(values.begin(), values.end());
@@ -283,7 +293,8 @@ const Reference& CachedReference(const Config& c) {
   return it->second;
 }
 
-detail::CostInput CostInputFor(const Config& c, const Reference& r, const std::vector<uint64_t>& census_left,
+detail::CostInput CostInputFor(const Config& c, const Reference& r,
+                               const std::vector<uint64_t>& census_left,
                                const std::vector<uint64_t>& census_right) {
   detail::CostInput in;
   in.width = c.width;
@@ -300,9 +311,9 @@ detail::CostInput CostInputFor(const Config& c, const Reference& r, const std::v
   return in;
 }
 
-// Configurations: odd sizes, num-disp 37 and 64, min-disp 0 / positive / negative, 4 and 8 paths, 1 and 2
-// threads, uint8 and uint16 path costs, BT on/off, gradient-adapted P2 on/off, both subpixel modes, a
-// non-default census window.
+// Configurations: odd sizes, num-disp 37 and 64, min-disp 0 / positive / negative, 4 and 8 paths, 1
+// and 2 threads, uint8 and uint16 path costs, BT on/off, gradient-adapted P2 on/off, both subpixel
+// modes, a non-default census window.
 std::vector<Config> Configs() {
   std::vector<Config> configs;
   Config c;
@@ -349,7 +360,8 @@ TEST_P(SgmKernelTest, CensusEqualsReference) {
     std::vector<uint64_t> codes(static_cast<size_t>(c.width) * c.height);
     // Two row ranges, as two threads would compute them.
     detail::CensusTransform(r.left, c.census_width, c.census_height, 0, c.height / 3, codes.data());
-    detail::CensusTransform(r.left, c.census_width, c.census_height, c.height / 3, c.height, codes.data());
+    detail::CensusTransform(r.left, c.census_width, c.census_height, c.height / 3, c.height,
+                            codes.data());
     ASSERT_EQ(codes, r.census_left) << Describe(c);
   }
 }
@@ -390,10 +402,12 @@ TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
       const int padded = detail::PaddedDisparities(num);
       std::vector<uint16_t> sum(static_cast<size_t>(c.width) * c.height * padded);
       std::vector<int> calls(c.height, 0);
-      detail::AggregatePaths(in, threads, &partial, &forward, &backward, [&](int y, const uint16_t* row) {
-        std::copy(row, row + static_cast<size_t>(c.width) * padded, sum.begin() + static_cast<size_t>(y) * c.width * padded);
-        ++calls[y];
-      });
+      detail::AggregatePaths(in, threads, &partial, &forward, &backward,
+                             [&](int y, const uint16_t* row) {
+                               std::copy(row, row + static_cast<size_t>(c.width) * padded,
+                                         sum.begin() + static_cast<size_t>(y) * c.width * padded);
+                               ++calls[y];
+                             });
       ASSERT_EQ(calls, std::vector<int>(c.height, 1));
       auto sum_row = [&](int y) { return sum.data() + static_cast<size_t>(y) * c.width * padded; };
       for (int y = 0; y < c.height; ++y) {
@@ -401,7 +415,8 @@ TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
           const uint16_t* s = sum_row(y) + static_cast<size_t>(x) * padded;
           for (int k = 0; k < num; ++k) {
             ASSERT_EQ(s[k], r.sum[(static_cast<size_t>(y) * c.width + x) * num + k])
-                << Describe(c) << " threads=" << threads << " at x=" << x << " y=" << y << " k=" << k;
+                << Describe(c) << " threads=" << threads << " at x=" << x << " y=" << y
+                << " k=" << k;
           }
           for (int k = num; k < padded; ++k) ASSERT_EQ(s[k], 0xFFFF);
         }
@@ -448,7 +463,8 @@ TEST_P(SgmKernelTest, WholePipelineEqualsReferenceForAnyThreadCount) {
   }
 }
 
-// ------------------------------------------------------------------------------------------ scalar stages
+// ------------------------------------------------------------------------------------------ scalar
+// stages
 TEST(SgmScalarStages, SubpixelOffsetsByHand) {
   const int equiangular = static_cast<int>(SgmSubpixel::kEquiangular);
   const int parabola = static_cast<int>(SgmSubpixel::kParabola);
@@ -458,7 +474,8 @@ TEST(SgmScalarStages, SubpixelOffsetsByHand) {
   EXPECT_EQ(detail::SubpixelOffset(equiangular, 10, 4, 4), 8);
   // Lines of slope 6 through (0, 4) and (1, 10), mirrored through (-1, 7): vertex at -0.25 → -4/16.
   EXPECT_EQ(detail::SubpixelOffset(equiangular, 7, 4, 10), -4);
-  // Parabola through (-1, 7), (0, 4), (1, 10): vertex at -(10 - 7) / (2 * 9) = -1/6 → -2.67/16 → -3.
+  // Parabola through (-1, 7), (0, 4), (1, 10): vertex at -(10 - 7) / (2 * 9) = -1/6 → -2.67/16 →
+  // -3.
   EXPECT_EQ(detail::SubpixelOffset(parabola, 7, 4, 10), -3);
   EXPECT_EQ(detail::SubpixelOffset(parabola, 4, 4, 4), 0);
   EXPECT_EQ(detail::SubpixelOffset(static_cast<int>(SgmSubpixel::kNone), 7, 4, 10), 0);

@@ -1,7 +1,7 @@
-// The stages of SgmMatcher as free functions over plain buffers (CONVENTIONS.md §4). The SIMD kernels
-// (census, matching cost, path aggregation, winner-takes-all) are compiled for every Highway target and
-// dispatched at run time; sgm_reference_test.cc holds a naive scalar reference of each and checks that they
-// agree exactly.
+// The stages of SgmMatcher as free functions over plain buffers (CONVENTIONS.md §4). The SIMD
+// kernels (census, matching cost, path aggregation, winner-takes-all) are compiled for every
+// Highway target and dispatched at run time; sgm_reference_test.cc holds a naive scalar reference
+// of each and checks that they agree exactly.
 #pragma once
 
 #include <cstddef>
@@ -15,15 +15,18 @@
 
 namespace linesight::detail {
 
-// Disparity lanes are padded to a multiple of this (the widest vector: 64 uint8 = 64 bytes) so every SIMD
-// target sees the same memory layout.
+// Disparity lanes are padded to a multiple of this (the widest vector: 64 uint8 = 64 bytes) so
+// every SIMD target sees the same memory layout.
 inline constexpr int kSgmLaneAlign = 64;
-// Path costs of padding lanes and of the guards around each disparity vector: large enough never to win a
-// minimum (path costs stay below kSgmMaxPathCost), small enough that adding P1 / P2 does not saturate.
+// Path costs of padding lanes and of the guards around each disparity vector: large enough never to
+// win a minimum (path costs stay below kSgmMaxPathCost), small enough that adding P1 / P2 does not
+// saturate.
 inline constexpr uint16_t kSgmPathSentinel = 0x7FFF;
-// Upper bound on matching cost + P2, which keeps every path cost below 4096 and the 8-path sum below 32768.
+// Upper bound on matching cost + P2, which keeps every path cost below 4096 and the 8-path sum
+// below 32768.
 inline constexpr int kSgmMaxPathCost = 4000;
-// Invalid value of the fixed-point disparity (int16, scale kSgmSubpixelScale) used for cv::filterSpeckles.
+// Invalid value of the fixed-point disparity (int16, scale kSgmSubpixelScale) used for
+// cv::filterSpeckles.
 inline constexpr int16_t kSgmInvalidFixed = INT16_MIN;
 
 inline int PaddedDisparities(int num_disparities) {
@@ -37,8 +40,10 @@ struct CacheAlignedAllocator {
   CacheAlignedAllocator() = default;
   template <typename U>
   CacheAlignedAllocator(const CacheAlignedAllocator<U>&) {}  // NOLINT(google-explicit-constructor)
-  T* allocate(size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t{64})); }
-  void deallocate(T* p, size_t) { ::operator delete(p, std::align_val_t{64}); }
+  T* allocate(size_t n) {
+    return static_cast<T*>(::operator new (n * sizeof(T), std::align_val_t{64}));
+  }
+  void deallocate(T* p, size_t) { ::operator delete (p, std::align_val_t{64}); }
   template <typename U>
   bool operator==(const CacheAlignedAllocator<U>&) const {
     return true;
@@ -48,17 +53,19 @@ template <typename T>
 using AlignedVector = std::vector<T, CacheAlignedAllocator<T>>;
 
 // ---------------------------------------------------------------------------------------------------------
-// Census transform. Bit b of a pixel's code is 1 when the b-th window neighbour (row-major order over the
-// window, centre skipped) is darker than the centre. Neighbours outside the image take the value of the
-// nearest border pixel. Writes rows [row_begin, row_end) of `codes` (width*height, row-major).
-void CensusTransform(const cv::Mat& gray, int window_width, int window_height, int row_begin, int row_end,
-                     uint64_t* codes);
+// Census transform. Bit b of a pixel's code is 1 when the b-th window neighbour (row-major order
+// over the window, centre skipped) is darker than the centre. Neighbours outside the image take the
+// value of the nearest border pixel. Writes rows [row_begin, row_end) of `codes` (width*height,
+// row-major).
+void CensusTransform(const cv::Mat& gray, int window_width, int window_height, int row_begin,
+                     int row_end, uint64_t* codes);
 
 // ---------------------------------------------------------------------------------------------------------
 // Matching cost C(x, y, k) for disparity d = min_disparity + k, k in [0, num_disparities):
-//   C = popcount(census_left(x) ^ census_right(x - d)) + (bt_weight * min(BT2, 2 * bt_truncation)) / 16
-// where BT2 is the Birchfield–Tomasi dissimilarity in half grey levels. When x - d falls outside the right
-// image C = MaxMatchingCost(). Lanes k >= num_disparities are unspecified.
+//   C = popcount(census_left(x) ^ census_right(x - d)) + (bt_weight * min(BT2, 2 * bt_truncation))
+//   / 16
+// where BT2 is the Birchfield–Tomasi dissimilarity in half grey levels. When x - d falls outside
+// the right image C = MaxMatchingCost(). Lanes k >= num_disparities are unspecified.
 struct CostInput {
   int width = 0;
   int height = 0;
@@ -78,10 +85,12 @@ void MatchingCostRow(const CostInput& input, int y, uint16_t* out);
 
 // ---------------------------------------------------------------------------------------------------------
 // Path aggregation. For each path direction r:
-//   L_r(p, k) = C(p, k) + min(L_r(p-r, k), L_r(p-r, k±1) + P1, min_i L_r(p-r, i) + P2'(p, r)) - min_i L_r(p-r, i)
+//   L_r(p, k) = C(p, k) + min(L_r(p-r, k), L_r(p-r, k±1) + P1, min_i L_r(p-r, i) + P2'(p, r)) -
+//   min_i L_r(p-r, i)
 // with L_r(p, k) = C(p, k) for the first pixel of a path, and
 //   P2'(p, r) = max(P1 + 1, P2 * alpha / (alpha + |I(p) - I(p-r)|))   (P2' = P2 when alpha = 0).
-// Sum S(x, y, k) = sum over paths of L_r. 4 paths: (±1, 0), (0, ±1); 8 paths add the four diagonals.
+// Sum S(x, y, k) = sum over paths of L_r. 4 paths: (±1, 0), (0, ±1); 8 paths add the four
+// diagonals.
 struct AggregationInput {
   CostInput cost;
   int num_paths = 8;
@@ -90,8 +99,8 @@ struct AggregationInput {
   int p2_gradient_alpha = 0;
 };
 
-// Partial sums of the sweep that reaches a row first: height rows of width pixels of PaddedDisparities()
-// uint16 lanes (the only full-size buffer of the matcher).
+// Partial sums of the sweep that reaches a row first: height rows of width pixels of
+// PaddedDisparities() uint16 lanes (the only full-size buffer of the matcher).
 struct SumVolume {
   int width = 0;
   int height = 0;
@@ -103,8 +112,9 @@ struct SumVolume {
   uint16_t* Row(int y) { return data.data() + static_cast<size_t>(y) * width * padded; }
 };
 
-// Path costs fit in uint8 when every one stays below 255: L <= max matching cost + P2. The census-only cost
-// qualifies for P2 <= 191; the uint8 kernels process twice the disparities per vector.
+// Path costs fit in uint8 when every one stays below 255: L <= max matching cost + P2. The
+// census-only cost qualifies for P2 <= 191; the uint8 kernels process twice the disparities per
+// vector.
 inline bool UsesNarrowPathCosts(const AggregationInput& input) {
   return input.cost.bt_weight == 0 && MaxMatchingCost(input.cost) + input.p2 <= 254;
 }
@@ -118,29 +128,31 @@ struct SweepScratch {
   AlignedVector<uint16_t> total_row;  // final S of the row being finished
 };
 
-// Receives the final S of row y: width pixels of PaddedDisparities() lanes; lanes k >= num_disparities hold
-// 0xFFFF (saturated sums of sentinels). The pointer is valid during the call only.
+// Receives the final S of row y: width pixels of PaddedDisparities() lanes; lanes k >=
+// num_disparities hold 0xFFFF (saturated sums of sentinels). The pointer is valid during the call
+// only.
 using RowDone = std::function<void(int y, const uint16_t* sum_row)>;
 
-// Runs the forward sweep (paths from the left / top) and the backward sweep (from the right / bottom). The
-// sweep that reaches a row first streams its 4-path (or 2-path) sum into `sum`; the second adds its own and
-// hands the final row to `row_done(y, S row)` (called once per row, from the thread that finished it). With
-// threads >= 2 the sweeps run concurrently: each first writes its half of the rows, then, after a barrier,
-// finishes the other half; integer sums make the result independent of the schedule.
-void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum, SweepScratch* forward,
-                    SweepScratch* backward, const RowDone& row_done);
+// Runs the forward sweep (paths from the left / top) and the backward sweep (from the right /
+// bottom). The sweep that reaches a row first streams its 4-path (or 2-path) sum into `sum`; the
+// second adds its own and hands the final row to `row_done(y, S row)` (called once per row, from
+// the thread that finished it). With threads >= 2 the sweeps run concurrently: each first writes
+// its half of the rows, then, after a barrier, finishes the other half; integer sums make the
+// result independent of the schedule.
+void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum,
+                    SweepScratch* forward, SweepScratch* backward, const RowDone& row_done);
 
 // ---------------------------------------------------------------------------------------------------------
 // Winner-takes-all of one row of S.
 //   best[x]   = smallest k with S(x, k) minimal
 //   best_cost = S(x, best), second_cost = min S(x, k) over |k - best| > 1 (0xFFFF if none)
-//   right_best[xr] / right_cost[xr]: smallest k minimising S(xr + min_disparity + k, k) over the left pixels
-//   x = xr + min_disparity + k inside the image (right_best = -1 if there is none).
+//   right_best[xr] / right_cost[xr]: smallest k minimising S(xr + min_disparity + k, k) over the
+//   left pixels x = xr + min_disparity + k inside the image (right_best = -1 if there is none).
 struct WtaRow {
-  int16_t* best = nullptr;         // width
-  uint16_t* best_cost = nullptr;   // width
-  uint16_t* second_cost = nullptr; // width
-  int16_t* right_best = nullptr;   // width
+  int16_t* best = nullptr;          // width
+  uint16_t* best_cost = nullptr;    // width
+  uint16_t* second_cost = nullptr;  // width
+  int16_t* right_best = nullptr;    // width
 };
 // `right_scratch` holds WtaScratchSize(width, num_disparities) uint16.
 void WinnerTakesAllRow(const uint16_t* sum_row, int width, int num_disparities, int min_disparity,
@@ -152,24 +164,25 @@ inline size_t WtaScratchSize(int width, int num_disparities) {
 // ---------------------------------------------------------------------------------------------------------
 // Scalar stages (cheap per pixel; no SIMD).
 
-// Subpixel offset in 1/kSgmSubpixelScale px for costs c0 = S(k-1), c1 = S(k), c2 = S(k+1), rounded half away
-// from zero. kEquiangular: (c0 - c2) / (2 (max(c0, c2) - c1)); kParabola: (c0 - c2) / (2 (c0 + c2 - 2 c1));
-// 0 when the denominator is 0.
+// Subpixel offset in 1/kSgmSubpixelScale px for costs c0 = S(k-1), c1 = S(k), c2 = S(k+1), rounded
+// half away from zero. kEquiangular: (c0 - c2) / (2 (max(c0, c2) - c1)); kParabola: (c0 - c2) / (2
+// (c0 + c2 - 2 c1)); 0 when the denominator is 0.
 int SubpixelOffset(int mode, int c0, int c1, int c2);  // mode: static_cast<int>(SgmSubpixel)
 
-// Left-right consistency: true when the right winner at x - (min_disparity + best) exists and differs from
-// `best` by at most max_diff.
+// Left-right consistency: true when the right winner at x - (min_disparity + best) exists and
+// differs from `best` by at most max_diff.
 bool LeftRightConsistent(int x, int best, const int16_t* right_best, int width, int min_disparity,
                          int max_diff);
 
-// 3×3 median over valid neighbours of each valid pixel (int16 fixed point, kSgmInvalidFixed = invalid);
-// the lower median when the count is even. Rows [row_begin, row_end) of dst.
+// 3×3 median over valid neighbours of each valid pixel (int16 fixed point, kSgmInvalidFixed =
+// invalid); the lower median when the count is even. Rows [row_begin, row_end) of dst.
 void MedianValid3x3(const cv::Mat& src, cv::Mat& dst, int row_begin, int row_end);
 
 // Name of the Highway target the kernels dispatch to.
 std::string DispatchedTargetName();
 
-// Runs fn(begin, end) over [0, n) split into `threads` contiguous parts (fn must be independent per index).
+// Runs fn(begin, end) over [0, n) split into `threads` contiguous parts (fn must be independent per
+// index).
 void ParallelRanges(int n, int threads, const std::function<void(int, int)>& fn);
 
 }  // namespace linesight::detail

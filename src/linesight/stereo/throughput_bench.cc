@@ -46,8 +46,8 @@ long ProcStatusKb(const std::string& field) {
   return -1;
 }
 
-// Seeded textured pair with a slanted disparity plane spanning 10 % .. 70 % of the range plus a nearer box,
-// so every matcher does representative work (not a constant shift).
+// Seeded textured pair with a slanted disparity plane spanning 10 % .. 70 % of the range plus a
+// nearer box, so every matcher does representative work (not a constant shift).
 void MakeSyntheticPair(const BenchSize& size, cv::Mat* left, cv::Mat* right) {
   const int w = size.width, h = size.height, margin = size.num_disparities + 8;
   cv::RNG rng(20240611);
@@ -63,12 +63,14 @@ void MakeSyntheticPair(const BenchSize& size, cv::Mat* left, cv::Mat* right) {
       const bool box = x > w / 3 && x < w / 2 && y > h / 3 && y < 2 * h / 3;
       const double d = size.num_disparities * (0.1 + 0.5 * x / w + (box ? 0.1 : 0.0));
       // Right pixel x sees the left pixel x + d.
-      right->at<uint8_t>(y, x) = texture.at<uint8_t>(y, std::min(x + margin + static_cast<int>(d), texture.cols - 1));
+      right->at<uint8_t>(y, x) =
+          texture.at<uint8_t>(y, std::min(x + margin + static_cast<int>(d), texture.cols - 1));
     }
   }
 }
 
-std::unique_ptr<StereoMatcher> CreateBenchMatcher(const std::string& method, const BenchSize& size, int threads) {
+std::unique_ptr<StereoMatcher> CreateBenchMatcher(const std::string& method, const BenchSize& size,
+                                                  int threads) {
   MatcherOptions options;
   options.num_disparities = size.num_disparities;
   options.threads = threads;
@@ -86,8 +88,10 @@ bool IsKnownMethod(const std::string& method) {
 }
 
 // Runs in the forked child: returns the measurements as JSON.
-nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& method, const BenchSize& size) {
-  // Reset the RSS high-water mark to the current RSS (Linux >= 4.0), so VmHWM is this measurement's own.
+nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& method,
+                              const BenchSize& size) {
+  // Reset the RSS high-water mark to the current RSS (Linux >= 4.0), so VmHWM is this measurement's
+  // own.
   { std::ofstream("/proc/self/clear_refs") << "5"; }
   const long start_kb = ProcStatusKb("VmRSS");
   cv::Mat left, right;
@@ -106,10 +110,12 @@ nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& me
     disparity = matcher->Compute(left, right);
     ms.push_back(watch.ElapsedMs());
   }
-  const double density = 100.0 * cv::countNonZero((disparity == disparity) & (disparity < kInvalidDisparity)) /
-                         static_cast<double>(disparity.total());
+  const double density =
+      100.0 * cv::countNonZero((disparity == disparity) & (disparity < kInvalidDisparity)) /
+      static_cast<double>(disparity.total());
   std::sort(ms.begin(), ms.end());
-  const double median = ms.size() % 2 == 1 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
+  const double median =
+      ms.size() % 2 == 1 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
   return {{"median_ms", median},
           {"min_ms", ms.front()},
           {"peak_kb", ProcStatusKb("VmHWM")},
@@ -117,14 +123,17 @@ nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& me
           {"density", density}};
 }
 
-BenchRow MeasureForked(const BenchOptions& options, const std::string& method, const BenchSize& size) {
+BenchRow MeasureForked(const BenchOptions& options, const std::string& method,
+                       const BenchSize& size) {
   BenchRow row;
   row.method = method;
   row.size = size;
   int fds[2];
-  if (pipe(fds) != 0) throw std::runtime_error(fmt::format("bench: pipe failed: {}", std::strerror(errno)));
+  if (pipe(fds) != 0)
+    throw std::runtime_error(fmt::format("bench: pipe failed: {}", std::strerror(errno)));
   const pid_t pid = fork();
-  if (pid < 0) throw std::runtime_error(fmt::format("bench: fork failed: {}", std::strerror(errno)));
+  if (pid < 0)
+    throw std::runtime_error(fmt::format("bench: fork failed: {}", std::strerror(errno)));
   if (pid == 0) {
     close(fds[0]);
     std::string text;
@@ -146,7 +155,8 @@ BenchRow MeasureForked(const BenchOptions& options, const std::string& method, c
   std::string text;
   char buffer[4096];
   ssize_t n;
-  while ((n = read(fds[0], buffer, sizeof(buffer))) > 0) text.append(buffer, static_cast<size_t>(n));
+  while ((n = read(fds[0], buffer, sizeof(buffer))) > 0)
+    text.append(buffer, static_cast<size_t>(n));
   close(fds[0]);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -177,7 +187,8 @@ BenchSize ParseBenchSize(const std::string& text) {
   static const std::regex pattern(R"((\d+)x(\d+)x(\d+))");
   std::smatch m;
   if (!std::regex_match(text, m, pattern)) {
-    throw UsageError(fmt::format("size '{}': expected WIDTHxHEIGHTxDISPARITIES, e.g. 752x480x128", text));
+    throw UsageError(
+        fmt::format("size '{}': expected WIDTHxHEIGHTxDISPARITIES, e.g. 752x480x128", text));
   }
   BenchSize size{std::stoi(m[1]), std::stoi(m[2]), std::stoi(m[3])};
   if (size.width < 16 || size.height < 16 || size.width > 16384 || size.height > 16384) {
@@ -199,11 +210,13 @@ void BenchOptions::Check() const {
               "left and right must both be given or both be empty");
   if (!left.empty()) {
     CheckOption(left.size() == right.size() && left.type() == right.type(), "BenchOptions.right",
-                fmt::format("{}x{}", right.cols, right.rows), "must have the size and type of left");
+                fmt::format("{}x{}", right.cols, right.rows),
+                "must have the size and type of left");
   }
 }
 
-BenchReport RunThroughputBench(const BenchOptions& options, const std::function<void(const BenchRow&)>& progress) {
+BenchReport RunThroughputBench(const BenchOptions& options,
+                               const std::function<void(const BenchRow&)>& progress) {
   options.Check();
   BenchReport report;
   report.cpu = CpuModel();
@@ -212,8 +225,8 @@ BenchReport RunThroughputBench(const BenchOptions& options, const std::function<
   report.simd_target = SgmSimdTarget();
   report.opencv_version = CV_VERSION;
   report.input = options.left.empty() ? "synthetic textured pair (slanted plane + box), seeded"
-                                      : fmt::format("given pair ({}x{}) resized to each size", options.left.cols,
-                                                    options.left.rows);
+                                      : fmt::format("given pair ({}x{}) resized to each size",
+                                                    options.left.cols, options.left.rows);
   report.runs = options.runs;
   report.warmup = options.warmup;
   for (const BenchSize& size : options.sizes) {
@@ -234,8 +247,8 @@ BenchReport RunThroughputBench(const BenchOptions& options, const std::function<
   for (BenchRow& row : report.rows) {
     for (const BenchRow& base : report.rows) {
       if (base.method == "sgbm-3way" && !base.skipped && base.size.width == row.size.width &&
-          base.size.height == row.size.height && base.size.num_disparities == row.size.num_disparities &&
-          !row.skipped) {
+          base.size.height == row.size.height &&
+          base.size.num_disparities == row.size.num_disparities && !row.skipped) {
         row.ratio_to_3way = row.mde_per_s / base.mde_per_s;
       }
     }
@@ -245,26 +258,30 @@ BenchReport RunThroughputBench(const BenchOptions& options, const std::function<
 
 std::string BenchMarkdown(const BenchReport& r) {
   std::ostringstream out;
-  out << fmt::format("machine: {} ({} hardware threads); threads used: {}; SIMD target (sgm kernels): {}; "
-                     "OpenCV {}\n",
-                     r.cpu, r.hardware_threads, r.threads, r.simd_target, r.opencv_version);
-  out << fmt::format("input: {}; median of {} runs after {} warm-up run(s) discarded; peak = VmHWM of a "
-                     "forked child per row\n\n",
-                     r.input, r.runs, r.warmup);
-  out << "| method | size | disparities | ms | fps | MDE/s | peak RSS (MiB) | added (MiB) | density % | vs "
+  out << fmt::format(
+      "machine: {} ({} hardware threads); threads used: {}; SIMD target (sgm kernels): {}; "
+      "OpenCV {}\n",
+      r.cpu, r.hardware_threads, r.threads, r.simd_target, r.opencv_version);
+  out << fmt::format(
+      "input: {}; median of {} runs after {} warm-up run(s) discarded; peak = VmHWM of a "
+      "forked child per row\n\n",
+      r.input, r.runs, r.warmup);
+  out << "| method | size | disparities | ms | fps | MDE/s | peak RSS (MiB) | added (MiB) | "
+         "density % | vs "
          "SGBM_3WAY |\n";
   out << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const BenchRow& row : r.rows) {
     const std::string size = fmt::format("{}x{}", row.size.width, row.size.height);
     if (row.skipped) {
-      out << fmt::format("| {} | {} | {} | skipped: {} | | | | | | |\n", row.method, size, row.size.num_disparities,
-                         row.note);
+      out << fmt::format("| {} | {} | {} | skipped: {} | | | | | | |\n", row.method, size,
+                         row.size.num_disparities, row.note);
       continue;
     }
-    out << fmt::format("| {} | {} | {} | {:.1f} | {:.1f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} | {} |\n", row.method,
-                       size, row.size.num_disparities, row.median_ms, row.fps, row.mde_per_s, row.peak_rss_mb,
-                       row.peak_added_mb, row.density,
-                       row.ratio_to_3way > 0 ? fmt::format("{:.2f}x", row.ratio_to_3way) : "-");
+    out << fmt::format(
+        "| {} | {} | {} | {:.1f} | {:.1f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} | {} |\n", row.method,
+        size, row.size.num_disparities, row.median_ms, row.fps, row.mde_per_s, row.peak_rss_mb,
+        row.peak_added_mb, row.density,
+        row.ratio_to_3way > 0 ? fmt::format("{:.2f}x", row.ratio_to_3way) : "-");
   }
   return out.str();
 }

@@ -1,7 +1,7 @@
-// End-to-end throughput of dense matchers measured in the same run on the same images (`linesight bench`):
-// our sgm / isgm against OpenCV's StereoSGBM (MODE_SGBM_3WAY and MODE_HH). Each (method, size) runs in a
-// forked child process so that its peak resident memory (VmHWM) is its own and OpenCV's thread pool starts
-// fresh; the child reports back through a pipe.
+// End-to-end throughput of dense matchers measured in the same run on the same images (`linesight
+// bench`): our sgm / isgm against OpenCV's StereoSGBM (MODE_SGBM_3WAY and MODE_HH). Each (method,
+// size) runs in a forked child process so that its peak resident memory (VmHWM) is its own and
+// OpenCV's thread pool starts fresh; the child reports back through a pipe.
 #pragma once
 
 #include <functional>
@@ -14,19 +14,20 @@
 namespace linesight {
 
 struct BenchSize {
-  int width = 752;           // px
-  int height = 480;          // px
-  int num_disparities = 128; // disparities searched
+  int width = 752;            // px
+  int height = 480;           // px
+  int num_disparities = 128;  // disparities searched
 };
 
 // "752x480x128" -> {752, 480, 128}; throws UsageError otherwise.
 BenchSize ParseBenchSize(const std::string& text);
 
 struct BenchOptions {
-  // Image sizes and disparity counts: the MYNT S1030 resolution at 128 and 192 disparities, KITTI at 128.
+  // Image sizes and disparity counts: the MYNT S1030 resolution at 128 and 192 disparities, KITTI
+  // at 128.
   std::vector<BenchSize> sizes = {{752, 480, 128}, {752, 480, 192}, {1242, 375, 128}};
-  // Methods: any CreateMatcher name, plus "sgbm-3way" and "sgbm-hh" (OpenCV StereoSGBM in that mode). A
-  // method the factory does not know (e.g. isgm before it exists) is reported as skipped.
+  // Methods: any CreateMatcher name, plus "sgbm-3way" and "sgbm-hh" (OpenCV StereoSGBM in that
+  // mode). A method the factory does not know (e.g. isgm before it exists) is reported as skipped.
   std::vector<std::string> methods = {"sgm", "isgm", "sgbm-3way", "sgbm-hh"};
   int runs = 7;     // timed runs per (method, size); the median is reported
   int warmup = 1;   // untimed runs before them (discarded)
@@ -41,24 +42,25 @@ struct BenchRow {
   std::string method;
   BenchSize size;
   bool skipped = false;
-  std::string note;          // why it was skipped, or the error
-  double median_ms = 0;      // median wall time of one Compute (ms)
-  double min_ms = 0;         // fastest run (ms)
-  double fps = 0;            // 1000 / median_ms
-  double mde_per_s = 0;      // W·H·D·fps / 1e6
-  double peak_rss_mb = 0;    // VmHWM of the child process (MiB): everything resident at its peak
-  double peak_added_mb = 0;  // VmHWM minus the RSS the child started with (MiB): what the method allocated
+  std::string note;        // why it was skipped, or the error
+  double median_ms = 0;    // median wall time of one Compute (ms)
+  double min_ms = 0;       // fastest run (ms)
+  double fps = 0;          // 1000 / median_ms
+  double mde_per_s = 0;    // W·H·D·fps / 1e6
+  double peak_rss_mb = 0;  // VmHWM of the child process (MiB): everything resident at its peak
+  double peak_added_mb =
+      0;  // VmHWM minus the RSS the child started with (MiB): what the method allocated
   double density = 0;        // % of pixels with an estimate in the last run
   double ratio_to_3way = 0;  // MDE/s relative to sgbm-3way at the same size (0 if not measured)
 };
 
 struct BenchReport {
-  std::string cpu;          // /proc/cpuinfo model name
+  std::string cpu;  // /proc/cpuinfo model name
   int hardware_threads = 0;
   int threads = 0;          // as used by the methods
   std::string simd_target;  // Highway target of the sgm kernels
   std::string opencv_version;
-  std::string input;        // "synthetic" or the input size
+  std::string input;  // "synthetic" or the input size
   int runs = 0, warmup = 0;
   std::vector<BenchRow> rows;
 };
