@@ -17,5 +17,8 @@ int RunPattern(int argc, char** argv);
 int RunEvalCalibration(int argc,
                        char** argv);  // `linesight eval calibration`, dispatched by eval.cc
 int RunRender(int argc, char** argv);
+int RunEvalSweep(int argc, char** argv);      // `linesight eval sweep`, dispatched by eval.cc
+int RunEvalReport(int argc, char** argv);     // `linesight eval report`, dispatched by eval.cc
+int RunEvalObstacles(int argc, char** argv);  // `linesight eval obstacles`, dispatched by eval.cc
 
 }  // namespace linesight::cli

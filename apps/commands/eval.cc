@@ -111,6 +111,9 @@ constexpr Study kStudies[] = {
      "calibration simulation study: zhang / recon / opencv vs the Cramer-Rao bound"},
     {"ranging", RunEvalRanging,
      "ranging accuracy on rendered power-line scenes + Middlebury metric depth"},
+    {"sweep", RunEvalSweep, "parameter study: one parameter at a time (SGBM family, isgm)"},
+    {"obstacles", RunEvalObstacles, "matchers on rendered damper / clamp / insulator crops"},
+    {"report", RunEvalReport, "run every study and write docs/results/README.md"},
 };
 
 void PrintEvalUsage(std::FILE* out) {

@@ -1,0 +1,79 @@
+// linesight eval report: regenerates the results page (src/linesight/eval/report.h).
+#include <filesystem>
+#include <iostream>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "linesight/core/error.h"
+#include "linesight/eval/report.h"
+
+namespace linesight::cli {
+
+int RunEvalReport(int argc, char** argv) {
+  CLI::App app{
+      "Run the whole comparison study (benchmarks, noise, parameter sweeps, obstacle images) and "
+      "write one markdown page with every table and plot plus a conclusion computed from the "
+      "numbers.",
+      "eval report"};
+  ReportOptions options;
+  std::string data_dir, out_dir = "docs/results";
+  std::vector<std::string> noise_texts;
+  for (const NoiseSpec& n : options.noise) noise_texts.push_back(n.Label());
+  bool quick = false, no_obstacles = false, no_gc = false;
+  app.add_option("--data", data_dir, "folder holding benchmark scenes (searched recursively)")
+      ->required();
+  app.add_option("--out", out_dir, "output folder for README.md and the SVG plots")
+      ->capture_default_str();
+  app.add_flag("--quick", quick,
+               "smaller run: middlebury-2001-2003 only, sweep on 2 scenes, obstacle images with "
+               "supersampling 2");
+  app.add_option("--methods", options.methods, "methods, comma-separated (isgm is compared)")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--sets", options.sets, "benchmark sets (default: every set found)")
+      ->delimiter(',');
+  app.add_option("--gc-sets", options.gc_sets, "sets gc (seconds per scene) runs on; * = every set")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_flag("--no-gc", no_gc, "leave gc out entirely");
+  app.add_option("--noise", noise_texts, "noise settings, clean first")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--noise-sets", options.noise_sets, "sets of the noise study")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--sweep-methods", options.sweep_methods, "methods of the parameter study")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option("--sweep-sets", options.sweep_sets, "sets of the parameter study")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_flag("--no-obstacles", no_obstacles, "skip the rendered obstacle images");
+  app.add_option("--threads", options.threads, "matcher threads (0 = all cores)")
+      ->capture_default_str();
+  std::string command_line = "linesight eval";  // argv[0] is the study name ("report")
+  for (int i = 0; i < argc; ++i) command_line += fmt::format(" {}", argv[i]);
+  return RunCommand(app, argc, argv, [&] {
+    options.data_dir = data_dir;
+    options.out_dir = out_dir;
+    options.noise.clear();
+    for (const std::string& text : noise_texts) options.noise.push_back(NoiseSpec::Parse(text));
+    const bool sets_given = !options.sets.empty();
+    if (quick) {
+      const auto explicit_sets = options.sets;
+      options.MakeQuick();
+      if (sets_given) options.sets = explicit_sets;
+    }
+    if (no_gc) std::erase(options.methods, std::string("gc"));
+    options.obstacles = !no_obstacles;
+    options.command_line = command_line;
+    GenerateReport(options);
+    std::cerr << fmt::format("eval report: wrote {}\n",
+                             (std::filesystem::path(out_dir) / "README.md").string());
+  });
+}
+
+}  // namespace linesight::cli

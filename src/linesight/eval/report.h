@@ -1,0 +1,65 @@
+// `linesight eval report`: regenerates one markdown page (docs/results/README.md) with every table
+// and plot of the comparison study (issue 6, item 6):
+//   1. a paper-style comparison table (correct-match rate = 100 - headline bad % per scene, total
+//      operation time) per method;
+//   2. the stereo benchmark tables (every method over every set, clean);
+//   3. noise robustness (clean, gauss:0.1, gauss:0.2, sp:0.15, sp:0.35): table + plot;
+//   4. the parameter study (RunSweep): table per parameter + plots;
+//   5. the obstacle images (RunEvalObstacles): table + plot;
+//   6. a conclusion computed from the numbers (where isgm beats or loses to each baseline on
+//      accuracy, noise robustness and time).
+// Every figure names the command, data, machine (CPU model, cores) and date that produced it.
+// gc (graph cuts) takes seconds per scene: it runs only on `gc_sets` (the page says so).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "linesight/eval/noise.h"
+#include "linesight/eval/obstacle_images.h"
+
+namespace linesight {
+
+struct ReportOptions {
+  std::filesystem::path data_dir;  // benchmark scenes (FindScenes)
+  std::filesystem::path out_dir;   // README.md and the SVG plots go here
+  // Methods in table order; "isgm" is the method the conclusion compares with the others.
+  std::vector<std::string> methods = {"isgm", "sgm", "sgbm", "sgbm-wls", "bm", "gc"};
+  // Sets the benchmark tables cover; empty = every set found.
+  std::vector<std::string> sets;
+  // Sets gc runs on (benchmark and noise); "*" = every set.
+  std::vector<std::string> gc_sets = {"middlebury-2001-2003"};
+  // Noise study: settings (clean first) and the sets it covers (empty = every benchmark set).
+  std::vector<NoiseSpec> noise = {NoiseSpec::Parse("clean"), NoiseSpec::Parse("gauss:0.1"),
+                                  NoiseSpec::Parse("gauss:0.2"), NoiseSpec::Parse("sp:0.15"),
+                                  NoiseSpec::Parse("sp:0.35")};
+  std::vector<std::string> noise_sets = {"middlebury-2001-2003", "middlebury-2005-2006-half"};
+  // Parameter study: methods and sets (empty sets = the first benchmark set); at most
+  // `sweep_max_scenes` scenes (0 = all).
+  std::vector<std::string> sweep_methods = {"sgbm", "sgbm-wls", "isgm"};
+  std::vector<std::string> sweep_sets = {"middlebury-2001-2003"};
+  int sweep_max_scenes = 0;
+  // Obstacle images (rendered power-line scene); methods = `methods`.
+  bool obstacles = true;
+  ObstacleImageOptions obstacle_images;
+  uint64_t noise_seed = 1;
+  int threads = 0;  // matcher threads, 0 = all cores
+  // Provenance printed with every figure.
+  std::string command_line = "linesight eval report";
+  bool show_progress = true;  // progress bars on stderr (only drawn on a terminal)
+
+  void Check() const;
+  // Smaller settings for `--quick`: benchmark and noise only on middlebury-2001-2003 (when
+  // present), parameter study on two scenes, obstacle images with supersampling 2.
+  void MakeQuick();
+};
+
+// "<CPU model> (<n> hardware threads)" from /proc/cpuinfo and std::thread.
+std::string MachineDescription();
+
+// Runs every study and writes <out_dir>/README.md (atomically) plus its SVG plots; returns the
+// page. Throws InputError when data_dir holds no scenes of the requested sets.
+std::string GenerateReport(const ReportOptions& options);
+
+}  // namespace linesight

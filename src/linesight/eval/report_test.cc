@@ -1,0 +1,79 @@
+#include "linesight/eval/report.h"
+
+#include <gtest/gtest.h>
+
+#include "linesight/core/atomic_file.h"
+#include "linesight/core/error.h"
+#include "linesight/eval/synthetic_scenes_test_util.h"
+
+namespace linesight {
+namespace {
+
+TEST(ReportTest, DefaultsValidAndBoundaries) {
+  ReportOptions o;
+  o.data_dir = "data";
+  o.out_dir = "out";
+  EXPECT_NO_THROW(o.Check());
+  ReportOptions no_out = o;
+  no_out.out_dir.clear();
+  EXPECT_THROW(no_out.Check(), OptionError);
+  ReportOptions noisy_first = o;
+  noisy_first.noise = {NoiseSpec::Parse("gauss:0.1")};
+  EXPECT_THROW(noisy_first.Check(), OptionError);
+  ReportOptions quick = o;
+  quick.MakeQuick();
+  EXPECT_NO_THROW(quick.Check());
+  EXPECT_EQ(quick.sweep_max_scenes, 2);
+}
+
+TEST(ReportTest, MachineDescriptionNamesTheThreads) {
+  EXPECT_NE(MachineDescription().find("hardware threads"), std::string::npos);
+}
+
+TEST(ReportTest, PageOnTinySyntheticDataHasEverySection) {
+  testing::ScopedTempDir dir;
+  testing::WriteTwoSyntheticScenes(dir.path() / "data");
+  ReportOptions options;
+  options.data_dir = dir.path() / "data";
+  options.out_dir = dir.path() / "results";
+  options.methods = {"isgm", "sgbm"};
+  options.noise = {NoiseSpec(), NoiseSpec::Parse("sp:0.15")};
+  options.sweep_methods = {"sgbm"};
+  options.obstacles = false;  // rendering the power-line scene is covered by the sim tests
+  options.threads = 1;
+  options.command_line = "report_test";
+  options.show_progress = false;
+  const std::string page = GenerateReport(options);
+  EXPECT_EQ(ReadTextFile(options.out_dir / "README.md"), page);
+  for (const char* section :
+       {"## 1. Comparison table", "## 2. Stereo benchmarks", "## 3. Noise robustness",
+        "## 4. Parameter study", "## 5. Obstacle images", "## 6. Conclusion"}) {
+    EXPECT_NE(page.find(section), std::string::npos) << section;
+  }
+  // Provenance with every figure, both scenes in the tables, computed conclusion lines.
+  EXPECT_NE(page.find("produced by `report_test`"), std::string::npos);
+  EXPECT_NE(page.find("hardware threads"), std::string::npos);
+  EXPECT_NE(page.find("| alpha | isgm |"), std::string::npos);
+  EXPECT_NE(page.find("| beta | sgbm |"), std::string::npos);
+  EXPECT_NE(page.find("**isgm vs sgbm** — accuracy: isgm"), std::string::npos);
+  EXPECT_NE(page.find("Noise: isgm is better at"), std::string::npos);
+  EXPECT_NE(page.find("Parameter study, sgbm block"), std::string::npos);
+  for (const char* plot : {"noise.svg", "sweep_rmse.svg", "sweep_bad.svg"}) {
+    EXPECT_TRUE(std::filesystem::exists(options.out_dir / plot)) << plot;
+    EXPECT_NE(page.find(std::string("(") + plot + ")"), std::string::npos) << plot;
+  }
+}
+
+TEST(ReportTest, MissingSetIsAnInputError) {
+  testing::ScopedTempDir dir;
+  testing::WriteTwoSyntheticScenes(dir.path() / "data");
+  ReportOptions options;
+  options.data_dir = dir.path() / "data";
+  options.out_dir = dir.path() / "results";
+  options.sets = {"kitti-2015"};
+  options.show_progress = false;
+  EXPECT_THROW(GenerateReport(options), InputError);
+}
+
+}  // namespace
+}  // namespace linesight
