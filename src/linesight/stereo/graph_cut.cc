@@ -661,7 +661,7 @@ GraphCutOptions ReadGraphCutOptions(const MatcherOptions& options, MatcherParams
   gc.min_disparity = options.min_disparity;
   gc.num_disparities = options.num_disparities;
   gc.threads = options.threads;
-  gc.data_term = params.GetString("data", "bt", {"bt", "census"}) == "census"
+  gc.data_term = params.GetString("data", "census", {"bt", "census"}) == "census"
                      ? GraphCutDataTerm::kCensus
                      : GraphCutDataTerm::kBirchfieldTomasi;
   gc.use_color = params.GetBool("color", gc.use_color);

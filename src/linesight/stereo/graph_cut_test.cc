@@ -241,6 +241,7 @@ TEST(GraphCutMatcherTest, RecoversAConstantShift) {
   ConstantShiftPair(24, 40, 5, left, right);
   GraphCutOptions options;
   options.num_disparities = 12;
+  options.data_term = GraphCutDataTerm::kBirchfieldTomasi;
   GraphCutMatcher matcher(options);
   const GraphCutResult result = matcher.ComputeDetailed(left, right);
   ASSERT_EQ(result.disparity.type(), CV_32FC1);
@@ -332,6 +333,8 @@ TEST(GraphCutMatcherTest, RecoversAFrontoParallelStepExactly) {
     const StepScene scene = MakeStepScene(color);
     GraphCutOptions options;
     options.num_disparities = 16;
+    // BT compares single pixels, so the depth edge can be exact (census windows straddle it).
+    options.data_term = GraphCutDataTerm::kBirchfieldTomasi;
     GraphCutMatcher matcher(options);
     const GraphCutResult result = matcher.ComputeDetailed(scene.left, scene.right);
     // Exact away from the depth edge; at a box corner the Potts boundary length does not change
@@ -350,6 +353,7 @@ TEST(GraphCutMatcherTest, LeftRightCheckFindsAndFillsOcclusions) {
   const StepScene scene = MakeStepScene(false);
   GraphCutOptions options;
   options.num_disparities = 16;
+  options.data_term = GraphCutDataTerm::kBirchfieldTomasi;
   options.lr_check = true;
   options.fill_occlusions = false;
   const GraphCutResult checked = GraphCutMatcher(options).ComputeDetailed(scene.left, scene.right);
@@ -391,6 +395,7 @@ TEST(GraphCutMatcherTest, IsDeterministicForAnySeedAndThreadCount) {
   const StepScene scene = MakeStepScene(true);
   GraphCutOptions options;
   options.num_disparities = 16;
+  options.data_term = GraphCutDataTerm::kBirchfieldTomasi;
   options.seed = 99;
   options.lr_check = true;
   options.threads = 1;
@@ -451,7 +456,8 @@ TEST(GraphCutMatcherTest, TsukubaBad1NonOccluded) {
   const double bad_percent = 100.0 * bad / evaluated;
   RecordProperty("bad1_nonocc_percent", std::to_string(bad_percent));
   std::printf("tsukuba gc bad-1.0 nonocc = %.2f %%\n", bad_percent);
-  // Issue acceptance is 3 %; 1.89 % was measured with these settings (published GC: 1.2-1.9 %).
+  // Issue acceptance is 3 %; 2.23 % was measured with these settings (census; 1.89 % with BT;
+  // published GC: 1.2-1.9 %).
   EXPECT_LE(bad_percent, 2.5);
 }
 
