@@ -121,6 +121,35 @@ bool LeftRightConsistent(int x, int best, const int16_t* right_best, int width, 
   return right >= 0 && std::abs(right - best) <= max_diff;
 }
 
+namespace {
+// Median of nine values with the classic 19 compare-exchange network (Paeth / Devillard).
+int16_t MedianOfNine(int16_t* p) {
+  auto sort2 = [p](int a, int b) {
+    if (p[a] > p[b]) std::swap(p[a], p[b]);
+  };
+  sort2(1, 2);
+  sort2(4, 5);
+  sort2(7, 8);
+  sort2(0, 1);
+  sort2(3, 4);
+  sort2(6, 7);
+  sort2(1, 2);
+  sort2(4, 5);
+  sort2(7, 8);
+  sort2(0, 3);
+  sort2(5, 8);
+  sort2(4, 7);
+  sort2(3, 6);
+  sort2(1, 4);
+  sort2(2, 5);
+  sort2(4, 7);
+  sort2(4, 2);
+  sort2(6, 4);
+  sort2(4, 2);
+  return p[4];
+}
+}  // namespace
+
 void MedianValid3x3(const cv::Mat& src, cv::Mat& dst, int row_begin, int row_end) {
   LS_CHECK(src.type() == CV_16SC1 && dst.type() == CV_16SC1 && src.size() == dst.size());
   const int w = src.cols, h = src.rows;
@@ -131,6 +160,15 @@ void MedianValid3x3(const cv::Mat& src, cv::Mat& dst, int row_begin, int row_end
       if (s[x] == kSgmInvalidFixed) {
         out[x] = kSgmInvalidFixed;
         continue;
+      }
+      if (y > 0 && y + 1 < h && x > 0 && x + 1 < w) {
+        const int16_t* up = src.ptr<int16_t>(y - 1) + x;
+        const int16_t* down = src.ptr<int16_t>(y + 1) + x;
+        int16_t v[9] = {up[-1], up[0], up[1], s[x - 1], s[x], s[x + 1], down[-1], down[0], down[1]};
+        if (std::find(v, v + 9, kSgmInvalidFixed) == v + 9) {
+          out[x] = MedianOfNine(v);
+          continue;
+        }
       }
       int16_t values[9];
       int n = 0;
