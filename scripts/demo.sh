@@ -8,7 +8,8 @@ JOBS=${JOBS:-$(nproc)}
 OUT=${OUT:-out}
 
 bash scripts/install-deps.sh
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+export CCACHE_BASEDIR="$(pwd)" CCACHE_NOHASHDIR=1
+cmake -S . -B build -G Ninja -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j"$JOBS" --target linesight
 mkdir -p "$OUT"
 ./build/apps/linesight demo --out "$OUT"

@@ -9,6 +9,11 @@ JOBS=${JOBS:-$(nproc)}
 
 bash scripts/install-deps.sh
 
+# ccache makes repeated builds (a second clone, the ASan build of unchanged code) cheap; BASEDIR makes its
+# hits independent of where the clone lives.
+export CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=1
+LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+
 if [ "${CI:-}" = "true" ]; then
   echo "== format check (clang-format, then git diff --exit-code)"
   git ls-files '*.cc' '*.h' | xargs clang-format -i
@@ -16,7 +21,8 @@ if [ "${CI:-}" = "true" ]; then
 fi
 
 echo "== release build (warnings as errors)"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DLINESIGHT_WERROR=ON -DLINESIGHT_STRICT=ON >/dev/null
+cmake -S . -B build -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=Release -DLINESIGHT_WERROR=ON \
+  -DLINESIGHT_STRICT=ON >/dev/null
 cmake --build build -j"$JOBS"
 
 echo "== tests"
@@ -24,7 +30,7 @@ ctest --test-dir build --output-on-failure -j"$JOBS" --timeout 600
 
 if [ "${CI:-}" = "true" ]; then
   echo "== ASan+UBSan build of the tests"
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
+  cmake -S . -B build-asan -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
     -DLINESIGHT_WERROR=ON -DLINESIGHT_STRICT=ON -DLINESIGHT_SANITIZE=ON -DLINESIGHT_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build build-asan -j"$JOBS"
   echo "== tests under ASan+UBSan"
