@@ -265,7 +265,7 @@ std::string ComparisonSection(const std::vector<EvalStereoResult>& bench,
         continue;
       }
       const double correct = 100.0 - PrimaryMetricFor(*it).value;
-      out += " " + Num(correct) + " |";
+      out += fmt::format(" {} |", Num(correct));
       sum += correct;
       ms += it->ms;
       ++n;
@@ -304,7 +304,7 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
     for (const std::string& method : methods) {
       t += "| " + method + " |";
       for (const std::string& l : labels) {
-        t += " " + Num(MeanHeadline(noisy, method, l, nullptr, only_set)) + " |";
+        t += fmt::format(" {} |", Num(MeanHeadline(noisy, method, l, nullptr, only_set)));
       }
       t += "\n";
     }
