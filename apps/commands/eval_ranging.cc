@@ -9,6 +9,8 @@
 #include <regex>
 #include <sstream>
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <opencv2/calib3d.hpp>
@@ -16,6 +18,9 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "linesight/calib/calibration_report.h"
+#include "linesight/calib/pattern.h"
+#include "linesight/calib/stereo_calibrator.h"
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
@@ -66,8 +71,9 @@ CellStats Summarise(const std::string& calibration, const std::string& type, dou
   return s;
 }
 
-// Calibration estimated from rendered chessboards with OpenCV (findChessboardCorners +
-// cornerSubPix, calibrateCamera per camera, stereoCalibrate, stereoRectify alpha 0).
+// Calibration estimated from rendered chessboards with our calibrator, as `linesight demo` does:
+// the boards are written to a scratch folder, detected (calib::DetectStereoPairs), calibrated with
+// calib::CalibrateStereo (method zhang) and rectified by calib::EvaluateCalibration.
 StereoCalibration EstimateCalibrationFromBoards(const sim::StereoRigOptions& rig, int views,
                                                 std::uint64_t seed, nlohmann::json* info) {
   sim::CalibrationBoardOptions options;
@@ -75,52 +81,44 @@ StereoCalibration EstimateCalibrationFromBoards(const sim::StereoRigOptions& rig
   options.num_stereo_views = views;
   options.seed = seed;
   const sim::CalibrationBoardSet set = sim::RenderCalibrationBoards(options);
-  const cv::Size pattern(set.board.cols, set.board.rows);
-  std::vector<cv::Point3f> object = set.board.ObjectPoints();
-  std::vector<std::vector<cv::Point3f>> objects;
-  std::vector<std::vector<cv::Point2f>> left_corners, right_corners;
-  for (const sim::BoardView& view : set.views) {
-    if (!view.board_in_left || !view.board_in_right) continue;
-    std::vector<cv::Point2f> l, r;
-    cv::Mat lg, rg;
-    cv::cvtColor(view.left, lg, cv::COLOR_BGR2GRAY);
-    cv::cvtColor(view.right, rg, cv::COLOR_BGR2GRAY);
-    const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE;
-    if (!cv::findChessboardCorners(lg, pattern, l, flags) ||
-        !cv::findChessboardCorners(rg, pattern, r, flags)) {
-      continue;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      fmt::format("linesight-eval-ranging-boards-{}-{}", ::getpid(), seed);
+  std::filesystem::create_directories(dir);
+  struct RemoveDir {
+    std::filesystem::path path;
+    ~RemoveDir() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
     }
-    const cv::TermCriteria criteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4);
-    cv::cornerSubPix(lg, l, {5, 5}, {-1, -1}, criteria);
-    cv::cornerSubPix(rg, r, {5, 5}, {-1, -1}, criteria);
-    objects.push_back(object);
-    left_corners.push_back(l);
-    right_corners.push_back(r);
+  } remove_dir{dir};
+  sim::WriteCalibrationBoards(dir, set);
+  std::vector<std::filesystem::path> left_paths, right_paths;
+  for (size_t i = 0; i < set.views.size(); ++i) {
+    left_paths.push_back(dir / fmt::format("left_{:02d}.png", i));
+    right_paths.push_back(dir / fmt::format("right_{:02d}.png", i));
   }
-  if (objects.size() < 3) {
-    throw InputError(
-        fmt::format("only {} of {} rendered board views were detected", objects.size(), views));
+  const calib::PatternSpec spec = calib::ParsePatternSpec(
+      fmt::format("chessboard:{}x{}:{}", set.board.cols, set.board.rows, set.board.square_m));
+  const calib::StereoDetections detections =
+      calib::DetectStereoPairs(left_paths, right_paths, spec, calib::DetectionOptions(), false);
+  if (detections.BothCount() < 3) {
+    throw InputError(fmt::format("only {} of {} rendered board views were detected in both cameras",
+                                 detections.BothCount(), views));
   }
-  StereoCalibration c;
-  c.image_size = set.calibration.image_size;
-  std::vector<cv::Mat> rvecs, tvecs;
-  const double rms_left =
-      cv::calibrateCamera(objects, left_corners, c.image_size, c.M1, c.D1, rvecs, tvecs);
-  const double rms_right =
-      cv::calibrateCamera(objects, right_corners, c.image_size, c.M2, c.D2, rvecs, tvecs);
-  const double rms =
-      cv::stereoCalibrate(objects, left_corners, right_corners, c.M1, c.D1, c.M2, c.D2,
-                          c.image_size, c.R, c.T, c.E, c.F, cv::CALIB_USE_INTRINSIC_GUESS,
-                          {cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 200, 1e-10});
-  cv::stereoRectify(c.M1, c.D1, c.M2, c.D2, c.image_size, c.R, c.T, c.R1, c.R2, c.P1, c.P2, c.Q,
-                    cv::CALIB_ZERO_DISPARITY, 0.0, c.image_size);
+  const calib::StereoObservations observations =
+      calib::ObservationsFromDetections(detections, calib::MakeBoardGeometry(spec));
+  calib::StereoCalibrationOptions calib_options;
+  calib_options.method = calib::ParseMethod("zhang");
+  const calib::StereoCalibrationResult estimate =
+      calib::CalibrateStereo(observations, calib_options);
+  const calib::CalibrationReport report = calib::EvaluateCalibration(observations, estimate);
+  const StereoCalibration c = report.calibration;
   const double true_baseline = set.calibration.Baseline();
-  (*info) = {{"method", "opencv (findChessboardCorners + calibrateCamera + stereoCalibrate)"},
+  (*info) = {{"method", "zhang (calib::CalibrateStereo + calib::EvaluateCalibration)"},
              {"views_rendered", views},
-             {"views_used", objects.size()},
-             {"rms_left_px", rms_left},
-             {"rms_right_px", rms_right},
-             {"rms_stereo_px", rms},
+             {"views_used", detections.BothCount()},
+             {"rms_stereo_px", report.stereo_rms_px},
              {"baseline_m", c.Baseline()},
              {"true_baseline_m", true_baseline},
              {"baseline_relative_error", (c.Baseline() - true_baseline) / true_baseline},

@@ -1,10 +1,13 @@
 #include "linesight/ranging/pipeline.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/stereo/isgm.h"
 
 namespace linesight {
 
@@ -14,6 +17,9 @@ void RangingPipelineOptions::Check() const {
               "must exceed min_depth_m");
   CheckOption(disparity_margin_px >= 0, "RangingPipelineOptions.disparity_margin_px",
               disparity_margin_px, "must be >= 0");
+  CheckOption(model_relative_sigma >= 0.0 && model_relative_sigma < 0.5,
+              "RangingPipelineOptions.model_relative_sigma", model_relative_sigma,
+              "must be in [0, 0.5)");
   rectify.Check();
 }
 
@@ -88,17 +94,30 @@ RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
                      cv::BORDER_REPLICATE);
   cv::copyMakeBorder(frame.right_rectified.rowRange(band), right_padded, 0, 0, pad, 0,
                      cv::BORDER_REPLICATE);
-  const cv::Mat band_disparity =
-      matcher_->Compute(left_padded, right_padded).colRange(pad, pad + expected.width);
-  frame.disparity = cv::Mat(expected, CV_32FC1, cv::Scalar(kInvalidDisparity));
-  band_disparity.copyTo(frame.disparity.rowRange(band));
-  // A match can only lie inside the right image: d <= x.
-  for (int y = band.start; y < band.end; ++y) {
-    float* d = frame.disparity.ptr<float>(y);
-    for (int x = 0; x < expected.width; ++x) {
-      if (IsValidDisparity(d[x]) && d[x] > float(x)) d[x] = kInvalidDisparity;
-    }
+  cv::Mat band_disparity, band_checked;
+  if (auto* isgm = dynamic_cast<IsgmMatcher*>(matcher_.get())) {
+    const IsgmResult detailed = isgm->ComputeDetailed(left_padded, right_padded);
+    band_disparity = detailed.disparity;
+    band_checked = detailed.sgm.disparity;
+  } else {
+    band_disparity = matcher_->Compute(left_padded, right_padded);
+    band_checked = band_disparity;
   }
+  auto unpad = [&](const cv::Mat& padded) {
+    cv::Mat full(expected, CV_32FC1, cv::Scalar(kInvalidDisparity));
+    padded.colRange(pad, pad + expected.width).copyTo(full.rowRange(band));
+    // A match can only lie inside the right image: d <= x.
+    for (int y = band.start; y < band.end; ++y) {
+      float* d = full.ptr<float>(y);
+      for (int x = 0; x < expected.width; ++x) {
+        if (IsValidDisparity(d[x]) && d[x] > float(x)) d[x] = kInvalidDisparity;
+      }
+    }
+    return full;
+  };
+  frame.disparity = unpad(band_disparity);
+  frame.checked_disparity =
+      band_checked.data == band_disparity.data ? frame.disparity : unpad(band_checked);
   return frame;
 }
 
@@ -107,12 +126,22 @@ std::vector<RangeResult> RangingPipeline::RangeRois(const RangingFrame& frame,
   std::vector<RangeResult> results;
   results.reserve(rois.size());
   for (const cv::Rect& roi : rois)
-    results.push_back(RangeObstacle(frame.disparity, geometry_, roi, options_.ranging));
+    results.push_back(RangeObstacle(RangingDisparity(frame), geometry_, roi, options_.ranging));
+  for (RangeResult& r : results) AddModelUncertainty(&r);
   return results;
 }
 
 std::vector<RangeResult> RangingPipeline::RangeAuto(const RangingFrame& frame) const {
-  return RangeAllObstacles(frame.disparity, geometry_, options_.finder, options_.ranging);
+  std::vector<RangeResult> results =
+      RangeAllObstacles(RangingDisparity(frame), geometry_, options_.finder, options_.ranging);
+  for (RangeResult& r : results) AddModelUncertainty(&r);
+  return results;
+}
+
+void RangingPipeline::AddModelUncertainty(RangeResult* result) const {
+  if (!result->ok()) return;
+  const double model = options_.model_relative_sigma * result->distance_m;
+  result->sigma_m = std::sqrt(result->sigma_m * result->sigma_m + model * model);
 }
 
 }  // namespace linesight

@@ -33,6 +33,16 @@ struct RangingPipelineOptions {
   bool search_from_zero = false;
   bool input_rectified =
       false;  // the pair is already rectified: skip remapping, use P1 P2 Q as given
+  // Range on the disparities that passed the matcher's consistency checks (uniqueness, left-right,
+  // speckle) only. For isgm that is its SGM stage: the plane-filled pixels of its dense output are
+  // guesses (sky, terrain and unmatched image borders take a plane's value) that bias the nearest
+  // surface and merge the automatic regions. Other matchers already mark such pixels invalid.
+  bool range_on_checked_disparity = true;
+  // Relative depth uncertainty that no residual inside the ROI reveals, added in quadrature to
+  // every result's sigma_m: the calibration's error in f*B and the matcher's systematic bias at an
+  // obstacle's nearest surface (subpixel locking, foreshortened thin rims). Chosen so that the
+  // +-2 sigma coverage of `linesight eval ranging` reaches 90 %.
+  double model_relative_sigma = 0.003;
   RectifyOptions rectify;
   // Their min/max depth are overwritten by the depths of the searched disparity range (the working
   // range widened by disparity_margin_px), so that an obstacle right at max_depth_m keeps all its
@@ -46,6 +56,13 @@ struct RangingPipelineOptions {
 struct RangingFrame {
   cv::Mat left_rectified, right_rectified;  // 8-bit, as given (grey or BGR)
   cv::Mat disparity;  // CV_32FC1 px, +inf invalid; rows outside a band are +inf
+  // CV_32FC1 px: the pixels of `disparity` that passed the matcher's consistency checks (isgm: its
+  // SGM stage before plane filling), +inf elsewhere. The same as `disparity` for other matchers.
+  cv::Mat checked_disparity;
+  // What ranging uses: checked_disparity if RangingPipelineOptions::range_on_checked_disparity.
+  const cv::Mat& ranging_disparity(bool checked) const {
+    return checked ? checked_disparity : disparity;
+  }
 };
 
 class RangingPipeline {
@@ -61,6 +78,8 @@ class RangingPipeline {
   std::vector<RangeResult> RangeRois(const RangingFrame& frame,
                                      const std::vector<cv::Rect>& rois) const;
   std::vector<RangeResult> RangeAuto(const RangingFrame& frame) const;
+  // Adds model_relative_sigma to a RangeObstacle result (RangeRois and RangeAuto do it already).
+  void AddModelUncertainty(RangeResult* result) const;
 
   const StereoCalibration& rectified_calibration() const { return rectified_calibration_; }
   const StereoGeometry& geometry() const { return geometry_; }
@@ -69,6 +88,11 @@ class RangingPipeline {
   const DisparityRange& search_range() const { return search_range_; }
   const StereoMatcher& matcher() const { return *matcher_; }
   const std::string& method() const { return method_; }
+  const RangingPipelineOptions& options() const { return options_; }
+  // The map RangeRois / RangeAuto use (see RangingPipelineOptions::range_on_checked_disparity).
+  const cv::Mat& RangingDisparity(const RangingFrame& frame) const {
+    return frame.ranging_disparity(options_.range_on_checked_disparity);
+  }
 
  private:
   RangingPipelineOptions options_;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
@@ -51,6 +52,14 @@ void RangingOptions::Check() const {
               "RangingOptions.mode_valley_fraction", mode_valley_fraction, "must be in [0, 1)");
   CheckOption(mode_min_support > 0.0 && mode_min_support <= 1.0, "RangingOptions.mode_min_support",
               mode_min_support, "must be in (0, 1]");
+  CheckOption(core_fraction > 0.0 && core_fraction <= 1.0, "RangingOptions.core_fraction",
+              core_fraction, "must be in (0, 1]");
+  CheckOption(silhouette_margin_x_px >= 0 && silhouette_margin_x_px <= 15,
+              "RangingOptions.silhouette_margin_x_px", silhouette_margin_x_px,
+              "must be in [0, 15]");
+  CheckOption(silhouette_margin_y_px >= 0 && silhouette_margin_y_px <= 15,
+              "RangingOptions.silhouette_margin_y_px", silhouette_margin_y_px,
+              "must be in [0, 15]");
   CheckOption(smoothing_radius_px >= 0 && smoothing_radius_px <= 15,
               "RangingOptions.smoothing_radius_px", smoothing_radius_px, "must be in [0, 15]");
   CheckOption(near_percentile >= 0.5 && near_percentile <= 1.0, "RangingOptions.near_percentile",
@@ -196,6 +205,22 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   };
   for (float d : values) histogram[size_t(bin_of(d))] += 1.0;
   const int n_used = int(values.size());
+  // The core of the ROI, where mode support is counted (see RangingOptions::core_fraction).
+  const int core_w = std::max(1, int(std::lround(options.core_fraction * roi.width)));
+  const int core_h = std::max(1, int(std::lround(options.core_fraction * roi.height)));
+  const cv::Rect core((roi.width - core_w) / 2, (roi.height - core_h) / 2, core_w, core_h);
+  std::vector<double> core_histogram(histogram.size(), 0.0);
+  int n_core = 0;
+  for (int y = core.y; y < core.br().y; ++y) {
+    for (int x = core.x; x < core.br().x; ++x) {
+      if (!valid.at<uchar>(y, x)) continue;
+      core_histogram[size_t(bin_of(view.at<float>(y, x)))] += 1.0;
+      ++n_core;
+    }
+  }
+  const bool use_core = n_core >= options.min_valid_pixels;
+  const std::vector<double>& support_histogram = use_core ? core_histogram : histogram;
+  const int n_support = use_core ? n_core : n_used;
   std::vector<double> smoothed(histogram.size(), 0.0);
   for (size_t i = 1; i + 1 < histogram.size(); ++i) {
     smoothed[i] = 0.25 * histogram[i - 1] + 0.5 * histogram[i] + 0.25 * histogram[i + 1];
@@ -210,31 +235,56 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
     if (smoothed[size_t(i)] <= level) continue;
     int j = i;
     double support = 0.0;
-    while (j >= 1 && smoothed[size_t(j)] > level) support += histogram[size_t(j--)];
-    if (support >= options.mode_min_support * n_used) {
+    while (j >= 1 && smoothed[size_t(j)] > level) support += support_histogram[size_t(j--)];
+    if (support >= options.mode_min_support * n_support) {
       mode_first = j + 1;
       mode_last = i;
     }
     i = j;
   }
   if (mode_first < 0) {
-    return NoMeasurement(result, fmt::format("no depth mode holds {:.0f} % of the {} valid pixels",
-                                             100.0 * options.mode_min_support, n_used));
+    return NoMeasurement(result,
+                         fmt::format("no depth mode holds {:.0f} % of the {} valid pixels{}",
+                                     100.0 * options.mode_min_support, n_support,
+                                     use_core ? " in the ROI's core" : ""));
   }
   // Grow by one bin on each side: the valley test on the smoothed histogram cuts tails early.
   mode_first = std::max(1, mode_first - 1);
   mode_last = std::min(bins, mode_last + 1);
 
   cv::Mat obstacle(roi.size(), CV_8U, cv::Scalar(0));
-  std::vector<float> obstacle_values;
-  int min_x = roi.width, min_y = roi.height, max_x = -1, max_y = -1;
   for (int y = 0; y < view.rows; ++y) {
     const float* d = view.ptr<float>(y);
     for (int x = 0; x < view.cols; ++x) {
       if (!valid.at<uchar>(y, x)) continue;
       const int b = bin_of(d[x]);
-      if (b < mode_first || b > mode_last) continue;
-      obstacle.at<uchar>(y, x) = 1;
+      if (b >= mode_first && b <= mode_last) obstacle.at<uchar>(y, x) = 1;
+    }
+  }
+  // Keep the mode's connected pieces that reach into the core: pieces of other objects at the
+  // same depth in the ROI's margin are not the obstacle. All pieces if none reaches the core.
+  if (use_core) {
+    cv::Mat labels;
+    const int count = cv::connectedComponents(obstacle, labels, 8, CV_32S);
+    std::vector<uchar> in_core(size_t(count), 0);
+    for (int y = core.y; y < core.br().y; ++y) {
+      for (int x = core.x; x < core.br().x; ++x) in_core[size_t(labels.at<int>(y, x))] = 1;
+    }
+    in_core[0] = 0;  // background label
+    if (std::count(in_core.begin(), in_core.end(), uchar(1)) > 0) {
+      for (int y = 0; y < view.rows; ++y) {
+        for (int x = 0; x < view.cols; ++x) {
+          if (!in_core[size_t(labels.at<int>(y, x))]) obstacle.at<uchar>(y, x) = 0;
+        }
+      }
+    }
+  }
+  std::vector<float> obstacle_values;
+  int min_x = roi.width, min_y = roi.height, max_x = -1, max_y = -1;
+  for (int y = 0; y < view.rows; ++y) {
+    const float* d = view.ptr<float>(y);
+    for (int x = 0; x < view.cols; ++x) {
+      if (!obstacle.at<uchar>(y, x)) continue;
       obstacle_values.push_back(d[x]);
       min_x = std::min(min_x, x);
       max_x = std::max(max_x, x);
@@ -253,9 +303,18 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   // Stage 4: local median of the obstacle's disparities (only obstacle pixels vote). The noise
   // level comes from the residuals against a wider median (radius noise_radius), which also sees
   // correlated matching errors that a 3x3 neighbourhood would hide.
+  // Pixels away from the mode's silhouette (see RangingOptions::silhouette_margin_x_px).
+  cv::Mat interior = obstacle;
+  if (options.silhouette_margin_x_px > 0 || options.silhouette_margin_y_px > 0) {
+    interior = cv::Mat();  // a new buffer: eroding in place would shrink `obstacle` too
+    cv::erode(obstacle, interior,
+              cv::getStructuringElement(cv::MORPH_RECT, {2 * options.silhouette_margin_x_px + 1,
+                                                         2 * options.silhouette_margin_y_px + 1}));
+    if (cv::countNonZero(interior) < options.min_valid_pixels) interior = obstacle.clone();
+  }
   const int r = options.smoothing_radius_px;
   const int noise_radius = std::max(4, r);
-  std::vector<float> smoothed_values, residuals, window;
+  std::vector<float> smoothed_values, all_smoothed_values, residuals, window;
   smoothed_values.reserve(size_t(m));
   residuals.reserve(size_t(m));
   auto local_median = [&](int x, int y, int radius) {
@@ -271,7 +330,8 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
     for (int x = 0; x < view.cols; ++x) {
       if (!obstacle.at<uchar>(y, x)) continue;
       residuals.push_back(view.at<float>(y, x) - local_median(x, y, noise_radius));
-      smoothed_values.push_back(r == 0 ? view.at<float>(y, x) : local_median(x, y, r));
+      all_smoothed_values.push_back(r == 0 ? view.at<float>(y, x) : local_median(x, y, r));
+      if (interior.at<uchar>(y, x)) smoothed_values.push_back(all_smoothed_values.back());
     }
   }
 
@@ -296,9 +356,12 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
       sigma_smoothed * std::max(std::sqrt(p * (1.0 - p) / effective_samples) / NormalDensity(z_p),
                                 1.0 / std::sqrt(tail_samples));
   const double tail_step = d_tail - d_near;
+  // Half the shift the silhouette pixels cause: how much the choice of pixels matters.
+  const double silhouette_shift = 0.5 * std::abs(Quantile(all_smoothed_values, p) - d_near);
   const double sigma_d =
       std::sqrt(options.disparity_sigma_floor_px * options.disparity_sigma_floor_px +
-                quantile_error * quantile_error + tail_step * tail_step);
+                quantile_error * quantile_error + tail_step * tail_step +
+                silhouette_shift * silhouette_shift);
   result.disparity_px = d_near;
   result.disparity_sigma_px = sigma_d;
   result.distance_m = geometry.DepthFromDisparity(d_near);

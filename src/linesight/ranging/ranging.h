@@ -56,6 +56,18 @@ struct RangingOptions {
   double mode_valley_fraction = 0.08;
   double mode_min_support =
       0.10;  // share of the valid pixels a mode needs to be taken as the obstacle
+  // Mode support is counted over the core of the ROI only: the ROI shrunk about its centre to this
+  // fraction of its width and height. An occluder in front that only overlaps the ROI's margin
+  // (a damper before the clamp behind it) then does not take the obstacle's place unless it
+  // dominates the core. 1 = the whole ROI.
+  double core_fraction = 0.6;
+  // Pixels of the obstacle's depth mode within this many pixels (horizontally / vertically) of
+  // the mode's silhouette are left out of the nearest-surface percentile: a matcher's window
+  // (census 9x7 -> 4, 3) spreads the nearer side's disparity across a depth edge (edge
+  // fattening), e.g. the conductor in front of the obstacle. Falls back to the whole mode when
+  // fewer than min_valid_pixels remain. 0 disables.
+  int silhouette_margin_x_px = 4;
+  int silhouette_margin_y_px = 3;
   int smoothing_radius_px =
       2;  // median of the obstacle's disparities over (2r+1)^2 before the percentile
   double near_percentile =

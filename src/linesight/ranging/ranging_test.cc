@@ -22,6 +22,13 @@ TEST(RangingOptionsTest, Boundaries) {
   EXPECT_NO_THROW((RangingOptions{.near_percentile = 1.0}.Check()));
   EXPECT_THROW((RangingOptions{.smoothing_radius_px = -1}.Check()), OptionError);
   EXPECT_THROW((RangingOptions{.correlation_length_px = 0.5}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.core_fraction = 0.0}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.core_fraction = 1.01}.Check()), OptionError);
+  EXPECT_NO_THROW((RangingOptions{.core_fraction = 1.0}.Check()));
+  EXPECT_THROW((RangingOptions{.silhouette_margin_x_px = -1}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.silhouette_margin_y_px = 16}.Check()), OptionError);
+  EXPECT_NO_THROW(
+      (RangingOptions{.silhouette_margin_x_px = 0, .silhouette_margin_y_px = 0}.Check()));
 }
 
 TEST(DisparityRangeTest, CoversTheWorkingRange) {
@@ -116,6 +123,65 @@ TEST(RangingTest, SphereDistanceIsAccurateAndSigmaIsCalibrated) {
     EXPECT_LT(std::abs(sum_error / runs), 0.01) << "at " << distance << " m";
     EXPECT_GE(covered, int(0.85 * runs)) << "at " << distance << " m";
   }
+}
+
+// An occluder in front that overlaps only the ROI's margin (the damper at 1.5 m before the clamp
+// at 3 m) must not be taken for the obstacle; one that covers the ROI's core is the obstacle.
+TEST(RangingTest, OccluderInTheMarginIsIgnoredUnlessItCoversTheCore) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  const cv::Rect roi(100, 60, 100, 100);
+  d(cv::Rect(120, 80, 60, 60)).setTo(float(g.DisparityFromDepth(3.0)));  // the obstacle
+  d(cv::Rect(60, 40, 60, 140)).setTo(float(g.DisparityFromDepth(1.5)));  // occluder, left margin
+  RangeResult r = RangeObstacle(d, g, roi, {});
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_NEAR(r.distance_m, 3.0, 1e-5);
+  EXPECT_EQ(r.box, cv::Rect(120, 80, 60, 60));
+  // Counting support over the whole ROI takes the occluder (20 % of the ROI), as before.
+  r = RangeObstacle(d, g, roi, {.core_fraction = 1.0});
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_NEAR(r.distance_m, 1.5, 1e-5);
+  // Occluder reaching well into the core: it is what the ROI shows nearest.
+  d(cv::Rect(60, 40, 90, 140)).setTo(float(g.DisparityFromDepth(1.5)));
+  r = RangeObstacle(d, g, roi, {});
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_NEAR(r.distance_m, 1.5, 1e-5);
+}
+
+// A pixel piece of the obstacle's depth in the ROI's margin that does not reach the core belongs to
+// something else: it is not part of the obstacle's box.
+TEST(RangingTest, PiecesOutsideTheCoreAreDropped) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  d(cv::Rect(130, 90, 40, 40)).setTo(float(g.DisparityFromDepth(2.0)));
+  d(cv::Rect(100, 60, 19, 19)).setTo(float(g.DisparityFromDepth(1.98)));  // corner piece
+  // (Thin-structure removal off, so that only the connected-piece rule can drop the corner.)
+  const RangeResult r = RangeObstacle(d, g, {100, 60, 100, 100}, {.min_body_width_m = 0.0});
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_NEAR(r.distance_m, 2.0, 1e-5);
+  EXPECT_EQ(r.box, cv::Rect(130, 90, 40, 40));
+}
+
+// Edge fattening: a 3 px rim around the obstacle carries a disparity 2 % too large (the nearer side
+// of a depth edge spread by the matcher's window). Leaving the silhouette out of the percentile
+// removes the bias; with the margin disabled the rim pulls the distance ~2 % nearer, and sigma
+// reports the shift.
+TEST(RangingTest, SilhouetteMarginRemovesEdgeFattening) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  const float true_d = float(g.DisparityFromDepth(3.0));
+  d(cv::Rect(117, 87, 66, 56)).setTo(1.02f * true_d);
+  d(cv::Rect(120, 90, 60, 50)).setTo(true_d);
+  const cv::Rect roi(100, 70, 100, 90);
+  const RangeResult with_margin = RangeObstacle(d, g, roi, {});
+  ASSERT_TRUE(with_margin.ok()) << with_margin.reason;
+  EXPECT_NEAR(with_margin.distance_m, 3.0, 1e-5);
+  const RangeResult without =
+      RangeObstacle(d, g, roi, {.silhouette_margin_x_px = 0, .silhouette_margin_y_px = 0});
+  ASSERT_TRUE(without.ok()) << without.reason;
+  EXPECT_LT(without.distance_m, 3.0 * 0.99);
+  // Sigma covers half the shift between the two pixel sets.
+  EXPECT_GT(with_margin.disparity_sigma_px, 0.5 * 0.02 * true_d * 0.9);
 }
 
 }  // namespace
