@@ -301,7 +301,7 @@ int RunEvalRanging(int argc, char** argv) {
   int runs = 50, boards = 15, supersampling = 2;
   std::uint64_t seed = 1;
   double noise_dn = 1.0;
-  std::vector<std::string> raw_params;
+  std::vector<std::string> raw_params, ranging_settings;
   RangingPipelineOptions options;
   app.add_option("--runs", runs, "measurements per type and distance (fresh sensor noise each)")
       ->capture_default_str();
@@ -326,12 +326,38 @@ int RunEvalRanging(int argc, char** argv) {
   app.add_option("--threads", options.threads, "matcher threads (0 = all)")->capture_default_str();
   app.add_option("--middlebury", middlebury_dir, "Middlebury 2014 scene folder ('' to skip)")
       ->capture_default_str();
+  app.add_option("--ranging", ranging_settings,
+                 "ranging setting key=value (repeatable): near_percentile, core_fraction, "
+                 "silhouette_margin_x_px, silhouette_margin_y_px, checked (0|1), "
+                 "model_relative_sigma");
   app.add_option("--json", json_path, "report (- for stdout)");
   app.add_option("--plot", plot_path, "SVG plot of relative error vs distance");
   app.add_option("--markdown", markdown_path, "write the table as Markdown too");
   return RunCommand(app, argc, argv, [&] {
     if (runs < 1) throw UsageError("--runs must be >= 1");
     options.params = ParseParams(raw_params);
+    for (const std::string& setting : ranging_settings) {
+      const size_t eq = setting.find('=');
+      const std::string key = setting.substr(0, eq);
+      const double value =
+          eq == std::string::npos ? NAN : ParseDoubles(setting.substr(eq + 1), "--ranging")[0];
+      if (key == "near_percentile") {
+        options.ranging.near_percentile = value;
+      } else if (key == "core_fraction") {
+        options.ranging.core_fraction = value;
+      } else if (key == "silhouette_margin_x_px") {
+        options.ranging.silhouette_margin_x_px = int(value);
+      } else if (key == "silhouette_margin_y_px") {
+        options.ranging.silhouette_margin_y_px = int(value);
+      } else if (key == "checked") {
+        options.range_on_checked_disparity = value != 0.0;
+      } else if (key == "model_relative_sigma") {
+        options.model_relative_sigma = value;
+      } else {
+        throw UsageError(
+            fmt::format("--ranging '{}': expected key=value with a known key", setting));
+      }
+    }
     const std::vector<double> distances = ParseDoubles(distances_text, "--distances");
     std::vector<sim::ObstacleType> types;
     std::vector<std::string> type_names;
