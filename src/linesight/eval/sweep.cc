@@ -81,10 +81,10 @@ std::vector<SweepParameter> EffectiveParameters(const SweepOptions& options) {
   for (const std::string& method : options.methods) {
     const auto params = DefaultSweepParameters(method);
     if (params.empty()) {
-      throw UsageError(fmt::format(
-          "eval sweep: no parameter study is defined for method '{}' (sgbm, sgbm-wls, bm, "
-          "isgm, sgm, gc have one)",
-          method));
+      throw UsageError(
+          fmt::format("no parameter study is defined for method '{}' (sgbm, sgbm-wls, bm, "
+                      "isgm, sgm, gc have one)",
+                      method));
     }
     out.insert(out.end(), params.begin(), params.end());
   }
@@ -128,7 +128,7 @@ SweepReport RunSweep(const std::vector<SceneRef>& scenes, const SweepOptions& op
                      ProgressBar* progress) {
   options.Check();
   const std::vector<SweepParameter> params = EffectiveParameters(options);
-  if (scenes.empty()) throw InputError("eval sweep: no scenes to evaluate");
+  if (scenes.empty()) throw InputError("parameter study: no scenes to evaluate");
 
   // Build every setting first so that unknown methods and keys fail before any work.
   struct Job {
@@ -168,7 +168,7 @@ SweepReport RunSweep(const std::vector<SceneRef>& scenes, const SweepOptions& op
           try {
             m.num_disparities = std::stoi(v);
           } catch (const std::exception&) {
-            throw UsageError(fmt::format("eval sweep: num_disp value '{}' is not an integer", v));
+            throw UsageError(fmt::format("num_disp value '{}' is not an integer", v));
           }
         }
       } else {

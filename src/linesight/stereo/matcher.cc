@@ -9,8 +9,8 @@
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/stereo/graph_cut.h"
-#include "linesight/stereo/opencv_matchers.h"
 #include "linesight/stereo/isgm.h"
+#include "linesight/stereo/opencv_matchers.h"
 #include "linesight/stereo/sgm.h"
 
 namespace linesight {
