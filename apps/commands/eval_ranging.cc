@@ -328,7 +328,8 @@ int RunEvalRanging(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--ranging", ranging_settings,
                  "ranging setting key=value (repeatable): near_percentile, core_fraction, "
-                 "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, checked (0|1), "
+                 "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
+                 "min_body_width_px, checked (0|1), "
                  "model_relative_sigma");
   app.add_option("--json", json_path, "report (- for stdout)");
   app.add_option("--plot", plot_path, "SVG plot of relative error vs distance");
@@ -351,6 +352,8 @@ int RunEvalRanging(int argc, char** argv) {
         options.ranging.silhouette_margin_y_px = int(value);
       } else if (key == "min_body_width_m") {
         options.ranging.min_body_width_m = value;
+      } else if (key == "min_body_width_px") {
+        options.ranging.min_body_width_px = value;
       } else if (key == "checked") {
         options.range_on_checked_disparity = value != 0.0;
       } else if (key == "model_relative_sigma") {

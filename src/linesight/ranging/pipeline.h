@@ -42,7 +42,7 @@ struct RangingPipelineOptions {
   // every result's sigma_m: the calibration's error in f*B and the matcher's systematic bias at an
   // obstacle's nearest surface (subpixel locking, foreshortened thin rims). Chosen so that the
   // +-2 sigma coverage of `linesight eval ranging` reaches 90 %.
-  double model_relative_sigma = 0.003;
+  double model_relative_sigma = 0.006;
   RectifyOptions rectify;
   // Their min/max depth are overwritten by the depths of the searched disparity range (the working
   // range widened by disparity_margin_px), so that an obstacle right at max_depth_m keeps all its

@@ -52,6 +52,8 @@ void RangingOptions::Check() const {
               "RangingOptions.mode_valley_fraction", mode_valley_fraction, "must be in [0, 1)");
   CheckOption(mode_min_support > 0.0 && mode_min_support <= 1.0, "RangingOptions.mode_min_support",
               mode_min_support, "must be in (0, 1]");
+  CheckOption(min_body_width_px >= 0.0 && min_body_width_px <= 64.0,
+              "RangingOptions.min_body_width_px", min_body_width_px, "must be in [0, 64]");
   CheckOption(core_fraction > 0.0 && core_fraction <= 1.0, "RangingOptions.core_fraction",
               core_fraction, "must be in (0, 1]");
   CheckOption(silhouette_margin_x_px >= 0 && silhouette_margin_x_px <= 15,
@@ -174,6 +176,7 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   if (options.min_body_width_m > 0.0) {
     ThinStructureOptions thin;
     thin.min_width_m = options.min_body_width_m;
+    thin.min_width_px = options.min_body_width_px;
     thin.min_depth_m = options.min_depth_m;
     thin.max_depth_m = options.max_depth_m;
     const cv::Mat body = BodyMask(disparity, geometry, roi, thin);

@@ -11,6 +11,8 @@ namespace linesight {
 
 void ThinStructureOptions::Check() const {
   CheckOption(min_width_m > 0.0, "ThinStructureOptions.min_width_m", min_width_m, "must be > 0");
+  CheckOption(min_width_px >= 0.0 && min_width_px <= 64.0, "ThinStructureOptions.min_width_px",
+              min_width_px, "must be in [0, 64]");
   CheckOption(depth_band_relative > 0.0 && depth_band_relative <= 0.5,
               "ThinStructureOptions.depth_band_relative", depth_band_relative,
               "must be in (0, 0.5]");
@@ -33,7 +35,8 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   const int bands = int(std::ceil((std::log(d_high + offset) - log_low) / band)) + 1;
   auto radius_of_band = [&](int k) {
     const double d = std::exp(log_low + (k + 0.5) * band) - offset;
-    return 0.5 * options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d);
+    return 0.5 * std::max(options.min_width_px,
+                          options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d));
   };
   // Work on the region plus a margin as wide as the largest body radius that occurs in it.
   double max_radius = 0.0;
@@ -42,8 +45,9 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     const float* d = inner.ptr<float>(y);
     for (int x = 0; x < inner.cols; ++x) {
       if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) {
-        max_radius =
-            std::max(max_radius, 0.5 * options.min_width_m * (d[x] + offset) / geometry.baseline_m);
+        max_radius = std::max(
+            max_radius, 0.5 * std::max(options.min_width_px, options.min_width_m * (d[x] + offset) /
+                                                                 geometry.baseline_m));
       }
     }
   }

@@ -13,6 +13,9 @@ namespace linesight {
 
 struct ThinStructureOptions {
   double min_width_m = 0.045;  // narrower surfaces are thin (m)
+  // ... or narrower than this many pixels (0 = off): a matcher widens a thin structure by about
+  // its window half-width on each side, so far away a conductor looks wider than min_width_m.
+  double min_width_px = 0.0;
   double depth_band_relative =
       0.04;                  // width of a depth band in ln(d); a surface spans 3 neighbouring bands
   double min_depth_m = 0.2;  // pixels outside the depth range are ignored (m)
