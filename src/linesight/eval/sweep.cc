@@ -296,7 +296,9 @@ std::string SweepReport::ToMarkdown() const {
       "the "
       "headline region, {} dense (a pixel without an estimate counts as bad), density %. The "
       "num-disp sweep replaces each scene's own search range, so scenes whose ground truth "
-      "exceeds the searched range get worse at small num-disp.\n\n",
+      "exceeds the searched range get worse at small num-disp. SGBM and BM also leave the first "
+      "num-disp columns of the image without an estimate, so a larger num-disp lowers their "
+      "density.\n\n",
       scene_names.size(), fmt::join(scene_names, ", "), bad_label);
   for (const std::string& key : KeysInOrder(curves)) {
     std::vector<const SweepCurve*> group;
