@@ -198,10 +198,13 @@ DemoReport RunDemo(const DemoOptions& options, std::FILE* log) {
     row.sigma_m = measured[i].sigma_m;
     row.error_percent =
         row.measured ? 100.0 * (row.distance_m - row.true_distance_m) / row.true_distance_m : 0;
-    int best_overlap = 0;
+    // The automatic region that matches this obstacle best: the largest intersection over union
+    // with the obstacle's true box (not the grown ROI, which large far regions would overlap).
+    double best_overlap = 0.0;
     for (const RangeResult& r : found) {
       if (!r.ok()) continue;
-      const int overlap = (r.box & rois[i]).area();
+      const double overlap =
+          double((r.box & truth.box).area()) / double((r.box | truth.box).area());
       if (overlap > best_overlap) {
         best_overlap = overlap;
         row.auto_found = true;
