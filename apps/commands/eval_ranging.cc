@@ -329,7 +329,7 @@ int RunEvalRanging(int argc, char** argv) {
   app.add_option("--ranging", ranging_settings,
                  "ranging setting key=value (repeatable): near_percentile, core_fraction, "
                  "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
-                 "min_body_width_px, checked (0|1), "
+                 "min_body_width_px, smoothing_radius_px, checked (0|1), "
                  "model_relative_sigma");
   app.add_option("--json", json_path, "report (- for stdout)");
   app.add_option("--plot", plot_path, "SVG plot of relative error vs distance");
@@ -354,6 +354,8 @@ int RunEvalRanging(int argc, char** argv) {
         options.ranging.min_body_width_m = value;
       } else if (key == "min_body_width_px") {
         options.ranging.min_body_width_px = value;
+      } else if (key == "smoothing_radius_px") {
+        options.ranging.smoothing_radius_px = int(value);
       } else if (key == "checked") {
         options.range_on_checked_disparity = value != 0.0;
       } else if (key == "model_relative_sigma") {
