@@ -189,6 +189,86 @@ TEST_F(CliTest, UnknownMethodAndFlagAndParamAreUsageErrors) {
   EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
 }
 
+// A valid calibration (as `linesight render` writes it) and a valid 4x3 PFM, for the bad-input
+// cases below.
+std::string ValidCalibrationYaml() {
+  return "%YAML:1.0\n---\nimage_width: 4\nimage_height: 3\n"
+         "M1: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 100., 0., 2., 0., "
+         "100., 1.5, 0., 0., 1. ]\n"
+         "D1: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n"
+         "M2: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 100., 0., 2., 0., "
+         "100., 1.5, 0., 0., 1. ]\n"
+         "D2: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ 0., 0., 0., 0., 0. ]\n"
+         "R: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 1., 0., 0., 0., 1., 0., "
+         "0., 0., 1. ]\n"
+         "T: !!opencv-matrix\n   rows: 3\n   cols: 1\n   dt: d\n   data: [ -0.1, 0., 0. ]\n"
+         "E: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 0., 0., 0., 0., 0., "
+         "0.1, 0., -0.1, 0. ]\n"
+         "F: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 0., 0., 0., 0., 0., "
+         "0.001, 0., -0.001, 0. ]\n"
+         "R1: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 1., 0., 0., 0., 1., "
+         "0., 0., 0., 1. ]\n"
+         "R2: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 1., 0., 0., 0., 1., "
+         "0., 0., 0., 1. ]\n"
+         "P1: !!opencv-matrix\n   rows: 3\n   cols: 4\n   dt: d\n   data: [ 100., 0., 2., 0., 0., "
+         "100., 1.5, 0., 0., 0., 1., 0. ]\n"
+         "P2: !!opencv-matrix\n   rows: 3\n   cols: 4\n   dt: d\n   data: [ 100., 0., 2., -10., "
+         "0., 100., 1.5, 0., 0., 0., 1., 0. ]\n"
+         "Q: !!opencv-matrix\n   rows: 4\n   cols: 4\n   dt: d\n   data: [ 1., 0., 0., -2., 0., "
+         "1., 0., -1.5, 0., 0., 0., 100., 0., 0., 10., 0. ]\n";
+}
+
+std::string ValidPfm() {
+  std::string pfm = "Pf\n4 3\n-1.0\n";
+  const float value = 5.0f;
+  for (int i = 0; i < 12; ++i) pfm.append(reinterpret_cast<const char*>(&value), sizeof(value));
+  return pfm;
+}
+
+TEST_F(CliTest, CloudWorksOnValidInputs) {
+  std::ofstream(dir_ / "stereo.yml") << ValidCalibrationYaml();
+  std::ofstream(dir_ / "d.pfm", std::ios::binary) << ValidPfm();
+  const RunResult r = Run("cloud --calib " + (dir_ / "stereo.yml").string() + " --disparity " +
+                          (dir_ / "d.pfm").string() + " --out " + (dir_ / "c.ply").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "c.ply"));
+}
+
+TEST_F(CliTest, TruncatedPfmNamesFileAndWritesNothing) {
+  std::ofstream(dir_ / "stereo.yml") << ValidCalibrationYaml();
+  const std::string pfm = ValidPfm();
+  std::ofstream(dir_ / "d.pfm", std::ios::binary) << pfm.substr(0, pfm.size() - 7);
+  const RunResult r = Run("cloud --calib " + (dir_ / "stereo.yml").string() + " --disparity " +
+                          (dir_ / "d.pfm").string() + " --out " + (dir_ / "c.ply").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("d.pfm"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "c.ply"));
+}
+
+TEST_F(CliTest, MalformedPfmHeaderNamesFile) {
+  std::ofstream(dir_ / "stereo.yml") << ValidCalibrationYaml();
+  std::ofstream(dir_ / "d.pfm", std::ios::binary) << "P5\n4 3\n255\n";
+  const RunResult r = Run("cloud --calib " + (dir_ / "stereo.yml").string() + " --disparity " +
+                          (dir_ / "d.pfm").string() + " --out " + (dir_ / "c.ply").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("d.pfm"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "c.ply"));
+}
+
+TEST_F(CliTest, CalibrationMissingFieldNamesIt) {
+  std::string yaml = ValidCalibrationYaml();
+  yaml = yaml.substr(0, yaml.find("Q: !!opencv-matrix"));
+  std::ofstream(dir_ / "stereo.yml") << yaml;
+  std::ofstream(dir_ / "d.pfm", std::ios::binary) << ValidPfm();
+  const RunResult r = Run("cloud --calib " + (dir_ / "stereo.yml").string() + " --disparity " +
+                          (dir_ / "d.pfm").string() + " --out " + (dir_ / "c.ply").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("stereo.yml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("'Q'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "c.ply"));
+}
+
 TEST_F(CliTest, EvalStereoOnOpenCvAloe) {
   const fs::path data = LINESIGHT_OPENCV_DATA_DIR;
   if (!fs::exists(data / "aloeGT.png"))
