@@ -26,28 +26,6 @@ void EvalStereoOptions::Check() const {
 
 namespace {
 
-std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, std::string>& params,
-                                                   const std::string& method) {
-  std::map<std::string, std::string> out;
-  for (const auto& [key, value] : params) {
-    const auto dot = key.find('.');
-    if (dot == std::string::npos) {
-      out[key] = value;
-    } else if (key.substr(0, dot) == method) {
-      out[key.substr(dot + 1)] = value;
-    }
-  }
-  return out;
-}
-
-// FNV-1a: a stable hash so that the noise of a scene does not depend on the order scenes are run
-// in.
-uint64_t StableHash(const std::string& text, uint64_t seed) {
-  uint64_t h = 1469598103934665603ull ^ seed;
-  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
 void SaveOutputs(const EvalStereoOptions& options, const StereoScene& scene,
                  const std::string& noise, const std::string& method, const cv::Mat& disparity) {
   fs::path rel = fs::path(scene.ref.set) / scene.ref.name;
@@ -73,6 +51,26 @@ void SaveOutputs(const EvalStereoOptions& options, const StereoScene& scene,
 std::string Fmt2(double v) { return fmt::format("{:.2f}", v); }
 
 }  // namespace
+
+std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, std::string>& params,
+                                                   const std::string& method) {
+  std::map<std::string, std::string> out;
+  for (const auto& [key, value] : params) {
+    const auto dot = key.find('.');
+    if (dot == std::string::npos) {
+      out[key] = value;
+    } else if (key.substr(0, dot) == method) {
+      out[key.substr(dot + 1)] = value;
+    }
+  }
+  return out;
+}
+
+uint64_t NoiseSeedFor(const std::string& key, uint64_t seed) {
+  uint64_t h = 1469598103934665603ull ^ seed;
+  for (unsigned char c : key) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
 
 PrimaryMetric PrimaryMetricFor(const EvalStereoResult& r) {
   const bool has_nonocc = r.regions.count("nonocc") > 0;
@@ -104,9 +102,9 @@ EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
       const std::string noise_label = noise.Label();
       const std::string scene_key = ref.set + "/" + ref.name + "/" + noise_label;
       const cv::Mat left =
-          AddImageNoise(scene.left, noise, StableHash(scene_key + "/left", options.noise_seed));
+          AddImageNoise(scene.left, noise, NoiseSeedFor(scene_key + "/left", options.noise_seed));
       const cv::Mat right =
-          AddImageNoise(scene.right, noise, StableHash(scene_key + "/right", options.noise_seed));
+          AddImageNoise(scene.right, noise, NoiseSeedFor(scene_key + "/right", options.noise_seed));
       for (const std::string& method : options.methods) {
         MatcherOptions matcher_options;
         matcher_options.min_disparity = scene.min_disparity;
@@ -168,16 +166,6 @@ nlohmann::json EvalStereoReport::ToJson() const {
 }
 
 namespace {
-
-template <typename Key>
-std::vector<std::string> UniqueInOrder(const std::vector<EvalStereoResult>& results, Key key) {
-  std::vector<std::string> out;
-  for (const auto& r : results) {
-    const std::string k = key(r);
-    if (std::find(out.begin(), out.end(), k) == out.end()) out.push_back(k);
-  }
-  return out;
-}
 
 // Mean headline figure of `method` at `noise` over all scenes (averaged per set first, then over
 // sets, so a set with many scenes does not dominate). NaN when nothing matched.

@@ -2,6 +2,8 @@
 // metrics.
 #pragma once
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -58,6 +60,26 @@ struct PrimaryMetric {
   double value = 0;    // percent, dense
 };
 PrimaryMetric PrimaryMetricFor(const EvalStereoResult& result);
+
+// The parameters of `method` from a study's params: "method.key" applies to that method only, a
+// plain "key" to every method.
+std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, std::string>& params,
+                                                   const std::string& method);
+
+// Seed of the noise of one view of one scene (FNV-1a of `key`, e.g. "set/scene/noise/left", mixed
+// with `seed`), so that the noise does not depend on the order in which scenes run.
+uint64_t NoiseSeedFor(const std::string& key, uint64_t seed);
+
+// The distinct values of key(result) in first-seen order.
+template <typename Key>
+std::vector<std::string> UniqueInOrder(const std::vector<EvalStereoResult>& results, Key key) {
+  std::vector<std::string> out;
+  for (const auto& r : results) {
+    std::string k = key(r);
+    if (std::find(out.begin(), out.end(), k) == out.end()) out.push_back(std::move(k));
+  }
+  return out;
+}
 
 struct EvalStereoReport {
   std::vector<EvalStereoResult> results;  // scene-major, then method in the requested order

@@ -122,36 +122,6 @@ void EvalObstaclesOptions::Check() const {
 
 namespace {
 
-std::map<std::string, std::string> ParamsFor(const std::map<std::string, std::string>& params,
-                                             const std::string& method) {
-  std::map<std::string, std::string> out;
-  for (const auto& [key, value] : params) {
-    const auto dot = key.find('.');
-    if (dot == std::string::npos) {
-      out[key] = value;
-    } else if (key.substr(0, dot) == method) {
-      out[key.substr(dot + 1)] = value;
-    }
-  }
-  return out;
-}
-
-uint64_t StableHash(const std::string& text, uint64_t seed) {
-  uint64_t h = 1469598103934665603ull ^ seed;
-  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
-  return h;
-}
-
-template <typename Key>
-std::vector<std::string> Unique(const std::vector<EvalStereoResult>& results, Key key) {
-  std::vector<std::string> out;
-  for (const auto& r : results) {
-    const std::string k = key(r);
-    if (std::find(out.begin(), out.end(), k) == out.end()) out.push_back(k);
-  }
-  return out;
-}
-
 double MeanObstacleBad1(const std::vector<EvalStereoResult>& results, const std::string& method,
                         const std::string& noise) {
   double sum = 0;
@@ -171,7 +141,7 @@ EvalObstaclesReport RunEvalObstacles(const std::vector<StereoScene>& scenes,
   options.Check();
   for (const std::string& method : options.methods) {
     MatcherOptions probe;
-    probe.params = ParamsFor(options.params, method);
+    probe.params = ParamsForMethod(options.params, method);
     CreateMatcher(method, probe);
   }
   EvalObstaclesReport report;
@@ -180,15 +150,15 @@ EvalObstaclesReport RunEvalObstacles(const std::vector<StereoScene>& scenes,
       const std::string label = noise.Label();
       const std::string key = scene.ref.set + "/" + scene.ref.name + "/" + label;
       const cv::Mat left =
-          AddImageNoise(scene.left, noise, StableHash(key + "/left", options.noise_seed));
+          AddImageNoise(scene.left, noise, NoiseSeedFor(key + "/left", options.noise_seed));
       const cv::Mat right =
-          AddImageNoise(scene.right, noise, StableHash(key + "/right", options.noise_seed));
+          AddImageNoise(scene.right, noise, NoiseSeedFor(key + "/right", options.noise_seed));
       for (const std::string& method : options.methods) {
         MatcherOptions m;
         m.min_disparity = scene.min_disparity;
         m.num_disparities = scene.num_disparities;
         m.threads = options.threads;
-        m.params = ParamsFor(options.params, method);
+        m.params = ParamsForMethod(options.params, method);
         auto matcher = CreateMatcher(method, m);
         Stopwatch watch;
         const cv::Mat disparity = matcher->Compute(left, right);
@@ -233,8 +203,8 @@ nlohmann::json EvalObstaclesReport::ToJson() const {
 
 std::string EvalObstaclesReport::ToMarkdown() const {
   std::string out;
-  const auto noises = Unique(results, [](const EvalStereoResult& r) { return r.noise; });
-  const auto methods = Unique(results, [](const EvalStereoResult& r) { return r.method; });
+  const auto noises = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.noise; });
+  const auto methods = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.method; });
   for (const std::string& noise : noises) {
     out += fmt::format("#### Obstacle crops{}\n\n", noise == "clean" ? "" : " — noise " + noise);
     out +=
@@ -271,8 +241,8 @@ std::string EvalObstaclesReport::ToMarkdown() const {
 }
 
 std::vector<std::string> EvalObstaclesReport::WritePlots(const fs::path& dir) const {
-  const auto noises = Unique(results, [](const EvalStereoResult& r) { return r.noise; });
-  const auto methods = Unique(results, [](const EvalStereoResult& r) { return r.method; });
+  const auto noises = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.noise; });
+  const auto methods = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.method; });
   if (noises.size() < 2) return {};
   LineChart chart;
   chart.title = "Obstacle pixels: error vs image noise";

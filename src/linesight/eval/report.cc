@@ -198,16 +198,6 @@ std::set<std::string> Intersect(const std::set<std::string>& a, const std::set<s
   return out;
 }
 
-template <typename Key>
-std::vector<std::string> Unique(const std::vector<EvalStereoResult>& results, Key key) {
-  std::vector<std::string> out;
-  for (const auto& r : results) {
-    const std::string k = key(r);
-    if (std::find(out.begin(), out.end(), k) == out.end()) out.push_back(k);
-  }
-  return out;
-}
-
 std::string Num(double v, int digits = 2) {
   return std::isnan(v) ? "–" : fmt::format("{:.{}f}", v, digits);
 }
@@ -223,7 +213,7 @@ struct Provenance {
 std::string ComparisonSection(const std::vector<EvalStereoResult>& bench,
                               const std::vector<std::string>& methods, const Provenance& prov) {
   std::string out = "## 1. Comparison table\n\n";
-  const auto sets = Unique(bench, [](const EvalStereoResult& r) { return r.set; });
+  const auto sets = UniqueInOrder(bench, [](const EvalStereoResult& r) { return r.set; });
   if (sets.empty()) return out + "No benchmark scene ran.\n\n";
   const std::string paper_set =
       std::find(sets.begin(), sets.end(), "middlebury-2001-2003") != sets.end()
@@ -289,7 +279,7 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
   if (noisy.empty()) return out + "No scene ran.\n\n";
   std::vector<std::string> labels;
   for (const NoiseSpec& n : noise) labels.push_back(n.Label());
-  const auto sets = Unique(noisy, [](const EvalStereoResult& r) { return r.set; });
+  const auto sets = UniqueInOrder(noisy, [](const EvalStereoResult& r) { return r.set; });
   out += fmt::format(
       "Noise added independently to both images (fixed seed; MATLAB imnoise definitions on [0,1] "
       "intensities: gauss = variance, sp = salt-and-pepper density). Headline error of each set "
@@ -367,7 +357,7 @@ std::string ConclusionSection(const std::vector<EvalStereoResult>& bench,
       const double b = MeanHeadline(bench, other, "clean", &common);
       std::vector<std::string> per_set;
       int better = 0, sets = 0;
-      for (const std::string& set : Unique(bench, [](const auto& r) { return r.set; })) {
+      for (const std::string& set : UniqueInOrder(bench, [](const auto& r) { return r.set; })) {
         const double sa = MeanHeadline(bench, ours, "clean", &common, set);
         const double sb = MeanHeadline(bench, other, "clean", &common, set);
         if (std::isnan(sa) || std::isnan(sb)) continue;
@@ -447,7 +437,7 @@ std::string ConclusionSection(const std::vector<EvalStereoResult>& bench,
     }
   }
   // Best method overall (methods that ran on every set).
-  const auto sets = Unique(bench, [](const auto& r) { return r.set; });
+  const auto sets = UniqueInOrder(bench, [](const auto& r) { return r.set; });
   std::string best;
   double best_value = kNaN;
   for (const std::string& m : methods) {
@@ -570,7 +560,7 @@ std::string GenerateReport(const ReportOptions& options) {
       "only.\n- **Methods**: {}. {}\n\nSections: 1. comparison table · 2. benchmark tables · 3. "
       "noise robustness · 4. parameter study · 5. obstacle images · 6. conclusion.\n\n",
       prov.command, prov.date, prov.data, bench_scenes.size(),
-      fmt::join(Unique(bench, [](const auto& r) { return r.set; }), ", "), prov.machine,
+      fmt::join(UniqueInOrder(bench, [](const auto& r) { return r.set; }), ", "), prov.machine,
       options.threads, fmt::join(options.methods, ", "), gc_note);
   page += ComparisonSection(bench, options.methods, prov);
 
