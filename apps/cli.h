@@ -9,6 +9,10 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "linesight/core/atomic_file.h"
+#include "linesight/io/json_io.h"
 
 namespace linesight::cli {
 
@@ -25,5 +29,17 @@ int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>
 void AddParamOption(CLI::App& app, std::vector<std::string>* raw);
 // "p1=8,p2=32" / ["p1=8","p2=32"] -> {p1: 8, p2: 32}; throws UsageError for an entry without '='.
 std::map<std::string, std::string> ParseParams(const std::vector<std::string>& raw);
+
+// Shows a study's report: markdown on stdout (unless the JSON goes to stdout), and the markdown,
+// JSON and plot files that were asked for. Report needs ToMarkdown(), ToJson() and WritePlots(dir).
+template <typename Report>
+void EmitReport(const Report& report, const std::string& json_path,
+                const std::string& markdown_path, const std::string& plots_dir) {
+  const std::string markdown = report.ToMarkdown();
+  if (json_path != "-") std::cout << markdown << std::flush;
+  if (!markdown_path.empty()) WriteTextAtomic(markdown_path, markdown);
+  if (!json_path.empty()) WriteJson(json_path, report.ToJson());
+  if (!plots_dir.empty()) report.WritePlots(plots_dir);
+}
 
 }  // namespace linesight::cli

@@ -63,11 +63,7 @@ int RunEvalObstacles(int argc, char** argv) {
         "eval obstacles");
     const EvalObstaclesReport report = RunEvalObstacles(scenes, options, &progress);
     progress.Finish();
-    const std::string markdown = report.ToMarkdown();
-    if (json_path != "-") std::cout << markdown << std::flush;
-    if (!markdown_path.empty()) WriteTextAtomic(markdown_path, markdown);
-    if (!json_path.empty()) WriteJson(json_path, report.ToJson());
-    if (!plots_dir.empty()) report.WritePlots(plots_dir);
+    EmitReport(report, json_path, markdown_path, plots_dir);
   });
 }
 

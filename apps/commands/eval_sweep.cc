@@ -64,11 +64,7 @@ int RunEvalSweep(int argc, char** argv) {
     ProgressBar progress(SweepSteps(options, scenes.size()), "eval sweep");
     const SweepReport report = RunSweep(scenes, options, &progress);
     progress.Finish();
-    const std::string markdown = report.ToMarkdown();
-    if (json_path != "-") std::cout << markdown << std::flush;
-    if (!markdown_path.empty()) WriteTextAtomic(markdown_path, markdown);
-    if (!json_path.empty()) WriteJson(json_path, report.ToJson());
-    if (!plots_dir.empty()) report.WritePlots(plots_dir);
+    EmitReport(report, json_path, markdown_path, plots_dir);
   });
 }
 

@@ -238,18 +238,27 @@ std::string EvalStereoReport::ToMarkdown() const {
     out +=
         "### Noise robustness\n\nHeadline error of each set (dense, %), averaged per set and then "
         "over "
-        "sets:\n\n| method |";
-    for (const std::string& noise : noises) out += " " + noise + " |";
-    out += "\n|---|";
-    for (size_t i = 0; i < noises.size(); ++i) out += "---|";
+        "sets:\n\n";
+    out += MethodByNoiseTable(methods, noises,
+                              [&](const std::string& method, const std::string& noise) {
+                                return MeanPrimary(results, method, noise);
+                              });
     out += "\n";
-    for (const std::string& method : methods) {
-      out += "| " + method + " |";
-      for (const std::string& noise : noises) {
-        out += fmt::format(" {:.2f} |", MeanPrimary(results, method, noise));
-      }
-      out += "\n";
-    }
+  }
+  return out;
+}
+
+std::string MethodByNoiseTable(
+    const std::vector<std::string>& methods, const std::vector<std::string>& noises,
+    const std::function<double(const std::string&, const std::string&)>& value) {
+  std::string out = "| method |";
+  for (const std::string& noise : noises) out += " " + noise + " |";
+  out += "\n|---|";
+  for (size_t i = 0; i < noises.size(); ++i) out += "---|";
+  out += "\n";
+  for (const std::string& method : methods) {
+    out += "| " + method + " |";
+    for (const std::string& noise : noises) out += fmt::format(" {:.2f} |", value(method, noise));
     out += "\n";
   }
   return out;

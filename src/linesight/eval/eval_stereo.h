@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -69,6 +70,12 @@ std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, s
 // Seed of the noise of one view of one scene (FNV-1a of `key`, e.g. "set/scene/noise/left", mixed
 // with `seed`), so that the noise does not depend on the order in which scenes run.
 uint64_t NoiseSeedFor(const std::string& key, uint64_t seed);
+
+// Markdown table with a row per method and a column per noise setting; value(method, noise) fills
+// the cells (two decimals).
+std::string MethodByNoiseTable(
+    const std::vector<std::string>& methods, const std::vector<std::string>& noises,
+    const std::function<double(const std::string& method, const std::string& noise)>& value);
 
 // The distinct values of key(result) in first-seen order.
 template <typename Key>

@@ -224,18 +224,11 @@ std::string EvalObstaclesReport::ToMarkdown() const {
     }
     out += "\n";
   }
-  out += "Mean bad-1 (%, dense) on the obstacle pixels over the obstacles:\n\n| method |";
-  for (const std::string& noise : noises) out += " " + noise + " |";
-  out += "\n|---|";
-  for (size_t i = 0; i < noises.size(); ++i) out += "---|";
-  out += "\n";
-  for (const std::string& method : methods) {
-    out += "| " + method + " |";
-    for (const std::string& noise : noises) {
-      out += fmt::format(" {:.2f} |", MeanObstacleBad1(results, method, noise));
-    }
-    out += "\n";
-  }
+  out += "Mean bad-1 (%, dense) on the obstacle pixels over the obstacles:\n\n";
+  out +=
+      MethodByNoiseTable(methods, noises, [&](const std::string& method, const std::string& noise) {
+        return MeanObstacleBad1(results, method, noise);
+      });
   out += "\n";
   return out;
 }
