@@ -72,23 +72,16 @@ int RunEvalStereo(int argc, char** argv) {
     options.noise_seed = noise_seed;
     options.save_disparity_dir = save_dir;
     options.plots_dir = plots_dir;
-    for (const auto& dir : {save_dir, plots_dir}) {
-      if (!dir.empty()) std::filesystem::create_directories(dir);
-    }
-    std::vector<SceneRef> scenes = FindScenes(data_dir);
-    if (!only_sets.empty()) {
-      std::erase_if(scenes, [&](const SceneRef& s) {
-        return std::find(only_sets.begin(), only_sets.end(), s.set) == only_sets.end();
-      });
-    }
+    const std::vector<SceneRef> scenes = SelectSets(FindScenes(data_dir), only_sets, "--sets");
     if (scenes.empty()) {
       throw InputError(
           fmt::format("{}: no benchmark scenes found (expected Middlebury, KITTI, ETH3D, "
                       "Scene Flow or opencv-doc Aloe layouts)",
                       data_dir));
     }
-    ProgressBar progress(static_cast<int64_t>(scenes.size() * options.methods.size()),
-                         "eval stereo");
+    ProgressBar progress(
+        static_cast<int64_t>(scenes.size() * options.methods.size() * options.noise.size()),
+        "eval stereo");
     const EvalStereoReport report = RunEvalStereo(scenes, options, &progress);
     progress.Finish();
     const std::string markdown = report.ToMarkdown();

@@ -38,19 +38,22 @@ int RunEvalReport(int argc, char** argv) {
   app.add_option("--gc-sets", options.gc_sets, "sets gc (seconds per scene) runs on; * = every set")
       ->delimiter(',')
       ->capture_default_str();
+  app.add_option("--gc-jobs", options.gc_jobs,
+                 "gc runs side by side, each single-threaded (0 = one per hardware thread)")
+      ->capture_default_str();
   app.add_flag("--no-gc", no_gc, "leave gc out entirely");
   app.add_option("--noise", noise_texts, "noise settings, clean first")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--noise-sets", options.noise_sets, "sets of the noise study")
-      ->delimiter(',')
-      ->capture_default_str();
+  app.add_option("--noise-sets", options.noise_sets,
+                 "sets of the noise study (default: every benchmark set)")
+      ->delimiter(',');
   app.add_option("--sweep-methods", options.sweep_methods, "methods of the parameter study")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--sweep-sets", options.sweep_sets, "sets of the parameter study")
-      ->delimiter(',')
-      ->capture_default_str();
+  app.add_option("--sweep-sets", options.sweep_sets,
+                 "sets of the parameter study (default: middlebury-2001-2003 when present)")
+      ->delimiter(',');
   app.add_flag("--no-obstacles", no_obstacles, "skip the rendered obstacle images");
   app.add_option("--threads", options.threads, "matcher threads (0 = all cores)")
       ->capture_default_str();
@@ -70,6 +73,11 @@ int RunEvalReport(int argc, char** argv) {
     if (no_gc) std::erase(options.methods, std::string("gc"));
     options.obstacles = !no_obstacles;
     options.command_line = command_line;
+    // The sources the binary was built from: the work tree holding the executable (build folders
+    // live inside it), else the current directory.
+    std::error_code error;
+    const auto exe = std::filesystem::read_symlink("/proc/self/exe", error);
+    options.commit = GitDescription(error ? std::filesystem::current_path() : exe.parent_path());
     GenerateReport(options);
     std::cerr << fmt::format("eval report: wrote {}\n",
                              (std::filesystem::path(out_dir) / "README.md").string());

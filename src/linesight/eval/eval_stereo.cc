@@ -5,6 +5,7 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
@@ -70,6 +71,32 @@ uint64_t NoiseSeedFor(const std::string& key, uint64_t seed) {
   uint64_t h = 1469598103934665603ull ^ seed;
   for (unsigned char c : key) h = (h ^ c) * 1099511628211ull;
   return h;
+}
+
+std::vector<SceneRef> SelectSets(const std::vector<SceneRef>& scenes,
+                                 const std::vector<std::string>& sets, const std::string& what) {
+  const bool all = sets.empty() || std::find(sets.begin(), sets.end(), "*") != sets.end();
+  std::vector<std::string> available;
+  for (const SceneRef& s : scenes) {
+    if (std::find(available.begin(), available.end(), s.set) == available.end()) {
+      available.push_back(s.set);
+    }
+  }
+  if (!all) {
+    for (const std::string& set : sets) {
+      if (std::find(available.begin(), available.end(), set) == available.end()) {
+        throw InputError(fmt::format("{}: unknown set '{}' (sets found: {})", what, set,
+                                     available.empty()
+                                         ? std::string("none")
+                                         : fmt::format("{}", fmt::join(available, ", "))));
+      }
+    }
+  }
+  std::vector<SceneRef> out;
+  for (const SceneRef& s : scenes) {
+    if (all || std::find(sets.begin(), sets.end(), s.set) != sets.end()) out.push_back(s);
+  }
+  return out;
 }
 
 PrimaryMetric PrimaryMetricFor(const EvalStereoResult& r) {

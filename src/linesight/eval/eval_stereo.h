@@ -77,6 +77,12 @@ std::string MethodByNoiseTable(
     const std::vector<std::string>& methods, const std::vector<std::string>& noises,
     const std::function<double(const std::string& method, const std::string& noise)>& value);
 
+// The scenes of `scenes` whose set is named in `sets` ("*" or an empty list = every scene), in
+// their order. Throws InputError naming `what` (e.g. "--noise-sets") when a named set has no scene
+// in `scenes`, so a misspelt set fails before anything runs or is written.
+std::vector<SceneRef> SelectSets(const std::vector<SceneRef>& scenes,
+                                 const std::vector<std::string>& sets, const std::string& what);
+
 // The distinct values of key(result) in first-seen order.
 template <typename Key>
 std::vector<std::string> UniqueInOrder(const std::vector<EvalStereoResult>& results, Key key) {

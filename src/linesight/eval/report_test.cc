@@ -24,6 +24,19 @@ TEST(ReportTest, DefaultsValidAndBoundaries) {
   quick.MakeQuick();
   EXPECT_NO_THROW(quick.Check());
   EXPECT_EQ(quick.sweep_max_scenes, 2);
+  // The full default covers the whole acceptance: gc and the noise study on every set.
+  EXPECT_EQ(o.gc_sets, std::vector<std::string>{"*"});
+  EXPECT_TRUE(o.noise_sets.empty());
+  EXPECT_EQ(o.noise.size(), 5u);
+  ReportOptions negative_jobs = o;
+  negative_jobs.gc_jobs = -1;
+  EXPECT_THROW(negative_jobs.Check(), OptionError);
+}
+
+TEST(ReportTest, GitDescriptionNamesTheCommitOrSaysUnknown) {
+  const std::string here = GitDescription(std::filesystem::path(__FILE__).parent_path());
+  EXPECT_FALSE(here.empty());
+  EXPECT_EQ(GitDescription("/nonexistent/folder"), "unknown");
 }
 
 TEST(ReportTest, MachineDescriptionNamesTheThreads) {
@@ -36,7 +49,8 @@ TEST(ReportTest, PageOnTinySyntheticDataHasEverySection) {
   ReportOptions options;
   options.data_dir = dir.path() / "data";
   options.out_dir = dir.path() / "results";
-  options.methods = {"isgm", "sgbm"};
+  options.methods = {"isgm", "sgbm", "gc"};
+  options.gc_jobs = 2;  // gc runs side by side
   options.noise = {NoiseSpec(), NoiseSpec::Parse("sp:0.15")};
   options.sweep_methods = {"sgbm"};
   options.obstacles = false;  // rendering the power-line scene is covered by the sim tests
@@ -55,6 +69,10 @@ TEST(ReportTest, PageOnTinySyntheticDataHasEverySection) {
   EXPECT_NE(page.find("hardware threads"), std::string::npos);
   EXPECT_NE(page.find("| alpha | isgm |"), std::string::npos);
   EXPECT_NE(page.find("| beta | sgbm |"), std::string::npos);
+  EXPECT_NE(page.find("| beta | gc |"), std::string::npos);
+  EXPECT_NE(page.find("| middlebury-2001-2003 | alpha | gc |"), std::string::npos);  // per scene
+  EXPECT_NE(page.find("gc (graph cuts) ran on every set"), std::string::npos);
+  EXPECT_NE(page.find("**isgm vs gc** — accuracy: isgm"), std::string::npos);
   EXPECT_NE(page.find("**isgm vs sgbm** — accuracy: isgm"), std::string::npos);
   EXPECT_NE(page.find("Noise: isgm is better at"), std::string::npos);
   EXPECT_NE(page.find("Parameter study, sgbm block"), std::string::npos);
@@ -73,6 +91,36 @@ TEST(ReportTest, MissingSetIsAnInputError) {
   options.sets = {"kitti-2015"};
   options.show_progress = false;
   EXPECT_THROW(GenerateReport(options), InputError);
+  EXPECT_FALSE(std::filesystem::exists(options.out_dir));
+}
+
+TEST(ReportTest, BadSetOrMethodFailsBeforeAnythingIsWritten) {
+  testing::ScopedTempDir dir;
+  testing::WriteTwoSyntheticScenes(dir.path() / "data");
+  ReportOptions base;
+  base.data_dir = dir.path() / "data";
+  base.out_dir = dir.path() / "results";
+  base.show_progress = false;
+  ReportOptions gc = base;
+  gc.gc_sets = {"middlebury-2001-2003", "no-such-set"};
+  ReportOptions noise = base;
+  noise.noise_sets = {"no-such-set"};
+  ReportOptions sweep = base;
+  sweep.sweep_sets = {"no-such-set"};
+  for (const ReportOptions& o : {gc, noise, sweep}) {
+    try {
+      GenerateReport(o);
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("unknown set 'no-such-set'"), std::string::npos)
+          << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(base.out_dir));
+  }
+  ReportOptions method = base;
+  method.methods = {"isgm", "nonsense"};
+  EXPECT_THROW(GenerateReport(method), UsageError);
+  EXPECT_FALSE(std::filesystem::exists(base.out_dir));
 }
 
 }  // namespace
