@@ -35,7 +35,13 @@ int RunEvalReport(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--sets", options.sets, "benchmark sets (default: every set found)")
       ->delimiter(',');
-  app.add_option("--gc-sets", options.gc_sets, "sets gc (seconds per scene) runs on; * = every set")
+  app.add_option("--gc-sets", options.gc_sets,
+                 "sets gc (seconds to minutes per scene) runs on; * = every set")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_option(
+         "--gc-noise-sets", options.gc_noise_sets,
+         "sets on which gc also runs the noise settings (4-8x its clean time); * = every set")
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--gc-jobs", options.gc_jobs,

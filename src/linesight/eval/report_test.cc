@@ -74,7 +74,8 @@ TEST(ReportTest, PageOnTinySyntheticDataHasEverySection) {
   EXPECT_NE(page.find("gc (graph cuts) ran on every set"), std::string::npos);
   EXPECT_NE(page.find("**isgm vs gc** — accuracy: isgm"), std::string::npos);
   EXPECT_NE(page.find("**isgm vs sgbm** — accuracy: isgm"), std::string::npos);
-  EXPECT_NE(page.find("Noise: isgm is better at"), std::string::npos);
+  EXPECT_NE(page.find("Noise (mean headline error over 2 scene(s)): isgm is better at"),
+            std::string::npos);
   EXPECT_NE(page.find("Parameter study, sgbm block"), std::string::npos);
   for (const char* plot : {"noise.svg", "sweep_rmse.svg", "sweep_bad.svg"}) {
     EXPECT_TRUE(std::filesystem::exists(options.out_dir / plot)) << plot;
