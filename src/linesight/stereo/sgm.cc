@@ -285,7 +285,9 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
 
   const int subpixel = static_cast<int>(o.subpixel);
   auto finish_row = [&](int y, const uint16_t* sum_row) {
-    std::vector<uint16_t> right_scratch(detail::WtaScratchSize(w, num));
+    // One scratch per thread (the two sweeps finish rows concurrently), reused between rows.
+    thread_local std::vector<uint16_t> right_scratch;
+    right_scratch.resize(detail::WtaScratchSize(w, num));
     detail::WtaRow row;
     row.best = s.best.ptr<int16_t>(y);
     row.best_cost = result.min_cost.ptr<uint16_t>(y);

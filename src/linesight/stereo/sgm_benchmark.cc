@@ -80,6 +80,7 @@ void BM_AggregatePaths(benchmark::State& state) {
 }
 BENCHMARK(BM_AggregatePaths)
     ->Args({752, 480, 128, 8, 1})
+    ->Args({752, 8, 128, 8, 1})
     ->Args({752, 480, 128, 8, 2})
     ->Args({752, 480, 128, 4, 2})
     ->UseRealTime()
@@ -99,9 +100,12 @@ void BM_WinnerTakesAll(benchmark::State& state) {
       });
   std::vector<int16_t> best(w), right_best(w);
   std::vector<uint16_t> best_cost(w), second(w), scratch(detail::WtaScratchSize(w, num));
+  // In the matcher each row is finished right after the aggregation wrote it (in cache): cycle over
+  // a few rows instead of streaming the whole volume from memory.
+  constexpr int kCachedRows = 4;
   for (auto _ : state) {
     for (int y = 0; y < h; ++y) {
-      detail::WinnerTakesAllRow(sum.data() + y * row_lanes, w, num, 0,
+      detail::WinnerTakesAllRow(sum.data() + (y % kCachedRows) * row_lanes, w, num, 0,
                                 {best.data(), best_cost.data(), second.data(), right_best.data()},
                                 scratch.data());
     }

@@ -4,6 +4,7 @@
 // every target the CPU supports.
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 #include <thread>
 
@@ -75,17 +76,23 @@ struct CostRowContext {
   const uint64_t* census_reversed = nullptr;
   const uint16_t* bt_left = nullptr;      // 3 * width: 2I, min2, max2
   const uint16_t* bt_reversed = nullptr;  // 3 * reversed_size
+  // Byte planes of the reversed right census: plane g (g < census_groups) holds byte g of each
+  // code, reversed_size bytes per plane (only for uint8 path costs, see PixelCost).
+  const uint8_t* planes_reversed = nullptr;
+  int census_groups = 0;
   size_t reversed_size = 0;
 };
 
 // Index i of the reversed arrays holds right pixel xr = width - 1 - min_disparity - i.
+// Rounded up to whole 64-lane vectors.
 inline size_t ReversedSize(const CostInput& in, int padded) {
-  return static_cast<size_t>(in.width) + padded + 64;
+  return (static_cast<size_t>(in.width) + padded + 64 + 63) / 64 * 64;
 }
 
 void PrepareCostRow(const CostInput& in, int y, int padded,
                     AlignedVector<uint64_t>* census_reversed, AlignedVector<uint16_t>* bt_reversed,
-                    AlignedVector<uint16_t>* bt_left, CostRowContext* ctx) {
+                    AlignedVector<uint16_t>* bt_left, AlignedVector<uint8_t>* planes_reversed,
+                    CostRowContext* ctx) {
   const int w = in.width;
   const size_t n = ReversedSize(in, padded);
   census_reversed->assign(n, 0);
@@ -100,6 +107,24 @@ void PrepareCostRow(const CostInput& in, int y, int padded,
   ctx->census_left = in.census_left + static_cast<size_t>(y) * w;
   ctx->census_reversed = census_reversed->data();
   ctx->reversed_size = n;
+  if (planes_reversed != nullptr) {
+    // Transpose the codes into byte planes, one vector of codes at a time.
+    const int groups = (in.census_bits + 7) / 8;
+    planes_reversed->resize(static_cast<size_t>(groups) * n);
+    const hn::ScalableTag<uint64_t> d64;
+    const hn::Rebind<uint8_t, decltype(d64)> d8q;
+    const size_t n64 = hn::Lanes(d64);
+    uint8_t* planes = planes_reversed->data();
+    for (size_t i = 0; i < n; i += n64) {
+      const auto codes = hn::Load(d64, census_reversed->data() + i);
+      for (int g = 0; g < groups; ++g) {
+        hn::StoreU(hn::TruncateTo(d8q, hn::ShiftRightSame(codes, 8 * g)), d8q,
+                   planes + static_cast<size_t>(g) * n + i);
+      }
+    }
+    ctx->planes_reversed = planes;
+    ctx->census_groups = groups;
+  }
   if (in.bt_weight > 0) {
     // Birchfield–Tomasi in half grey levels: 2I and the min / max of 2I and the two half-pixel
     // interpolations.
@@ -137,7 +162,40 @@ HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, T* HWY_RESTRICT out)
   const CostInput& in = *ctx.input;
   const int padded = ctx.padded;
   const size_t base = static_cast<size_t>(in.width - 1 - x);
-  {
+  if constexpr (sizeof(T) == 1) {
+    // Hamming distance as the sum of byte popcounts over the byte planes: uint8 lanes throughout.
+    const hn::ScalableTag<uint8_t> d8;
+    const size_t n8 = hn::Lanes(d8);
+    static_assert(std::endian::native == std::endian::little, "byte g of a code is at offset g");
+    const uint8_t* left_bytes = reinterpret_cast<const uint8_t*>(ctx.census_left + x);
+    const size_t n = ctx.reversed_size;
+    const uint8_t* planes = ctx.planes_reversed + base;
+    if (ctx.census_groups == 8) {
+      // The default 9×7 window (62 bits): unrolled, the broadcast bytes kept in registers.
+      hn::Vec<decltype(d8)> left[8];
+      for (int g = 0; g < 8; ++g) left[g] = hn::Set(d8, left_bytes[g]);
+      for (int k = 0; k < padded; k += static_cast<int>(n8)) {
+        hn::Vec<decltype(d8)> counts[8];
+        for (int g = 0; g < 8; ++g) {
+          counts[g] = hn::PopulationCount(
+              hn::Xor(hn::LoadU(d8, planes + static_cast<size_t>(g) * n + k), left[g]));
+        }
+        const auto sum =
+            hn::Add(hn::Add(hn::Add(counts[0], counts[1]), hn::Add(counts[2], counts[3])),
+                    hn::Add(hn::Add(counts[4], counts[5]), hn::Add(counts[6], counts[7])));
+        hn::StoreU(sum, d8, out + k);
+      }
+    } else {
+      for (int k = 0; k < padded; k += static_cast<int>(n8)) {
+        auto acc = hn::Zero(d8);
+        for (int g = 0; g < ctx.census_groups; ++g) {
+          const auto right = hn::LoadU(d8, planes + static_cast<size_t>(g) * n + k);
+          acc = hn::Add(acc, hn::PopulationCount(hn::Xor(right, hn::Set(d8, left_bytes[g]))));
+        }
+        hn::StoreU(acc, d8, out + k);
+      }
+    }
+  } else {
     const hn::ScalableTag<uint64_t> d64;
     const hn::Rebind<T, decltype(d64)> d16h;
     const size_t n64 = hn::Lanes(d64);
@@ -186,7 +244,7 @@ void MatchingCostRowImpl(const CostInput& in, int y, uint16_t* out) {
   AlignedVector<uint64_t> census_reversed;
   AlignedVector<uint16_t> bt_reversed, bt_left;
   CostRowContext ctx;
-  PrepareCostRow(in, y, padded, &census_reversed, &bt_reversed, &bt_left, &ctx);
+  PrepareCostRow(in, y, padded, &census_reversed, &bt_reversed, &bt_left, nullptr, &ctx);
   for (int x = 0; x < in.width; ++x)
     PixelCost<uint16_t>(ctx, x, out + static_cast<size_t>(x) * padded);
 }
@@ -246,7 +304,26 @@ struct PathStep {
   T* cur_min = nullptr;
 };
 
-// Smallest lane of a uint8 or uint16 vector (Highway 1.0.3 has no MinOfLanes for uint8).
+// Smallest lane of a uint8 or uint16 vector (Highway 1.0.3 has no MinOfLanes for uint8). On x86
+// the vector is folded to 128 bits and finished with PHMINPOSUW (short latency: the horizontal path
+// waits for this minimum at every pixel).
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSE4
+template <class D, class V>
+HWY_INLINE auto FoldTo128(D d, V v) {
+  if constexpr (hn::MaxLanes(d) * sizeof(hn::TFromD<D>) > 16) {
+    const hn::Half<D> dh;
+    return FoldTo128(dh, hn::Min(hn::LowerHalf(dh, v), hn::UpperHalf(dh, v)));
+  } else {
+    return v;
+  }
+}
+template <class D, class V>
+HWY_INLINE hn::TFromD<D> SmallestLane(D d, V v) {
+  __m128i x = FoldTo128(d, v).raw;
+  if constexpr (sizeof(hn::TFromD<D>) == 1) x = _mm_min_epu8(x, _mm_srli_epi16(x, 8));
+  return static_cast<hn::TFromD<D>>(_mm_cvtsi128_si32(_mm_minpos_epu16(x)) & 0xFFFF);
+}
+#else
 template <class D, class V>
 HWY_INLINE hn::TFromD<D> SmallestLane(D d, V v) {
   if constexpr (sizeof(hn::TFromD<D>) == 1) {
@@ -258,16 +335,19 @@ HWY_INLINE hn::TFromD<D> SmallestLane(D d, V v) {
     return hn::GetLane(hn::MinOfLanes(d, v));
   }
 }
+#endif
 
-// Adds the uint16 lanes of the path-cost vector l (of T) into acc0 (and acc1 for the upper half of
-// uint8).
+// Adds the uint16 lanes of the path-cost vector l (of T) into acc0; for uint8 lanes, acc0 takes
+// the even disparities of the vector and acc1 the odd ones (masks and shifts instead of
+// cross-lane widening; EvenOddToNatural restores the order).
 template <class D, class DW, class V, class VW>
 HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
 #if HWY_TARGET != HWY_SCALAR
   if constexpr (sizeof(hn::TFromD<D>) == 1) {
-    const hn::Half<D> dh;
-    *acc0 = hn::Add(*acc0, hn::PromoteTo(dw, hn::LowerHalf(dh, l)));
-    *acc1 = hn::Add(*acc1, hn::PromoteTo(dw, hn::UpperHalf(dh, l)));
+    (void)d;
+    const auto pairs = hn::BitCast(dw, l);
+    *acc0 = hn::Add(*acc0, hn::And(pairs, hn::Set(dw, uint16_t{0xFF})));
+    *acc1 = hn::Add(*acc1, hn::ShiftRight<8>(pairs));
   } else
 #endif
   {
@@ -277,6 +357,38 @@ HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
     *acc0 = hn::Add(*acc0, l);
   }
 }
+
+#if HWY_TARGET != HWY_SCALAR
+// Sums of the even (`even`) and odd (`odd`) disparities of one uint8 vector → the same sums in
+// disparity order: `lo` holds the first half of the disparities, `hi` the second.
+template <class DW, class VW>
+HWY_INLINE void EvenOddToNatural(DW dw, VW even, VW odd, VW* lo, VW* hi) {
+#if HWY_TARGET <= HWY_AVX3
+  (void)dw;
+  alignas(64) static constexpr uint16_t kLow[32] = {0,  32, 1,  33, 2,  34, 3,  35, 4,  36, 5,
+                                                    37, 6,  38, 7,  39, 8,  40, 9,  41, 10, 42,
+                                                    11, 43, 12, 44, 13, 45, 14, 46, 15, 47};
+  alignas(64) static constexpr uint16_t kHigh[32] = {16, 48, 17, 49, 18, 50, 19, 51, 20, 52, 21,
+                                                     53, 22, 54, 23, 55, 24, 56, 25, 57, 26, 58,
+                                                     27, 59, 28, 60, 29, 61, 30, 62, 31, 63};
+  *lo = VW{_mm512_permutex2var_epi16(even.raw, _mm512_load_si512(kLow), odd.raw)};
+  *hi = VW{_mm512_permutex2var_epi16(even.raw, _mm512_load_si512(kHigh), odd.raw)};
+#else
+  // InterleaveLower / Upper work per 128-bit block: block b of `il` holds disparities 16b..16b+7,
+  // of `iu` 16b+8..16b+15.
+  const VW il = hn::InterleaveLower(dw, even, odd);
+  const VW iu = hn::InterleaveUpper(dw, even, odd);
+  if constexpr (hn::MaxLanes(dw) * sizeof(uint16_t) == 32) {
+    *lo = hn::ConcatLowerLower(dw, iu, il);
+    *hi = hn::ConcatUpperUpper(dw, iu, il);
+  } else {
+    static_assert(hn::MaxLanes(dw) * sizeof(uint16_t) == 16, "128, 256 or 512-bit vectors");
+    *lo = il;
+    *hi = iu;
+  }
+#endif
+}
+#endif
 
 // One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and
 // either streams their sum into `partial` (first sweep over this row) or adds the other sweep's
@@ -322,9 +434,19 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
       Accumulate(d, dw, l, &acc0, &acc1);
     }
     if (kAdd) {
-      hn::StoreU(hn::Add(acc0, hn::Load(dw, partial + k)), dw, total + k);
-      if (sizeof(T) == 1)
-        hn::StoreU(hn::Add(acc1, hn::Load(dw, partial + k + nw)), dw, total + k + nw);
+#if HWY_TARGET != HWY_SCALAR
+      if constexpr (sizeof(T) == 1) {
+        // `partial` holds the even sums, then the odd sums of the chunk.
+        VW lo, hi;
+        EvenOddToNatural(dw, hn::Add(acc0, hn::Load(dw, partial + k)),
+                         hn::Add(acc1, hn::Load(dw, partial + k + nw)), &lo, &hi);
+        hn::StoreU(lo, dw, total + k);
+        hn::StoreU(hi, dw, total + k + nw);
+      } else
+#endif
+      {
+        hn::StoreU(hn::Add(acc0, hn::Load(dw, partial + k)), dw, total + k);
+      }
     } else {
       hn::Stream(acc0, dw, partial + k);  // read by the other sweep much later: bypass the caches
       if (sizeof(T) == 1) hn::Stream(acc1, dw, partial + k + nw);
@@ -366,7 +488,7 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
     const int prev_y = y - direction;
     const int cur_parity = t & 1, prev_parity = 1 - cur_parity;
     PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed,
-                   &scratch->bt_left, &ctx);
+                   &scratch->bt_left, sizeof(T) == 1 ? &scratch->planes_reversed : nullptr, &ctx);
     const uint8_t* gray = cin.gray_left + static_cast<size_t>(y) * w;
     const uint8_t* gray_prev = t > 0 ? cin.gray_left + static_cast<size_t>(prev_y) * w : nullptr;
     uint16_t* partial_row = sum->Row(y);
@@ -472,51 +594,200 @@ void SweepImpl(const AggregationInput& in, int direction, int step_begin, int st
 
 // -------------------------------------------------------------------------------------
 // winner-takes-all
+//
+// Left view: per pixel, the smallest lane (folded reduction), the first lane equal to it, and the
+// smallest lane outside the ±1 neighbourhood of the winner.
+//
+// Right view: right pixel xr collects S(xr + min_disparity + k, k) along a diagonal of the row. A
+// "shift register" of padded + one vector of uint16 lanes holds, after pixel x, the running minimum
+// (and its k) of right pixel xr = x - min_disparity - j in lane j: before each pixel every lane
+// moves up by one, then lanes k < padded take S(x, k) when it is strictly smaller (the smallest k
+// wins ties because lanes are visited in increasing k for a fixed xr). Lanes >= padded only carry
+// finished values; every vector's worth of pixels the top vector is written out.
+
+// Lanes of `cur` moved up by one; lane 0 takes the top lane of `below` (the next lower vector).
+// (re-evaluated for every target that foreach_target compiles)
+#undef LINESIGHT_SGM_SHIFT_REGISTER
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSE4
+#define LINESIGHT_SGM_SHIFT_REGISTER 1
+#else
+#define LINESIGHT_SGM_SHIFT_REGISTER 0
+#endif
+#if LINESIGHT_SGM_SHIFT_REGISTER
+template <class D, class V>
+HWY_INLINE V ShiftUpOneLane(D /*d*/, V cur, V below) {
+#if HWY_TARGET <= HWY_AVX3
+  const __m512i carried = _mm512_alignr_epi64(cur.raw, below.raw, 7);
+#if HWY_TARGET <= HWY_AVX3_DL
+  return V{_mm512_shldi_epi64(cur.raw, carried, 16)};
+#else
+  return V{_mm512_or_si512(_mm512_slli_epi64(cur.raw, 16), _mm512_srli_epi64(carried, 48))};
+#endif
+#elif HWY_TARGET == HWY_AVX2
+  return V{_mm256_alignr_epi8(cur.raw, _mm256_permute2x128_si256(below.raw, cur.raw, 0x21), 14)};
+#else
+  return V{_mm_alignr_epi8(cur.raw, below.raw, 14)};
+#endif
+}
+#endif
+
+#if LINESIGHT_SGM_SHIFT_REGISTER
+// The same with kVectors = padded / Lanes vectors per pixel known at compile time: the pixel's
+// costs and the shift register stay in registers, and the winner's index is found without branches
+// (the smallest index among the lanes equal to the minimum).
+template <int kVectors>
+void WinnerTakesAllRowRegisters(const uint16_t* sum_row, int width, int min_disparity, WtaRow out) {
+  const hn::ScalableTag<uint16_t> d;
+  using V = hn::Vec<decltype(d)>;
+  constexpr int kMaxLanes = static_cast<int>(hn::MaxLanes(d));
+  const int n = static_cast<int>(hn::Lanes(d));
+  const int padded = kVectors * n;
+  const V all_ones = hn::Set(d, uint16_t{0xFFFF});
+  const V two = hn::Set(d, uint16_t{2});
+  V iota[kVectors], run_cost[kVectors + 1], run_k[kVectors + 1];
+  for (int v = 0; v < kVectors; ++v) iota[v] = hn::Iota(d, static_cast<uint16_t>(v * n));
+  for (int v = 0; v <= kVectors; ++v) run_cost[v] = run_k[v] = all_ones;
+  alignas(64) uint16_t lanes[(kVectors + 1) * kMaxLanes];
+  // Lane j of the register holds right pixel x_last - min_disparity - j.
+  auto emit = [&](int first_vector, int x_last) HWY_ATTR {
+    for (int v = first_vector; v <= kVectors; ++v) hn::Store(run_k[v], d, lanes + v * n);
+    for (int j = first_vector * n; j < (kVectors + 1) * n; ++j) {
+      const int xr = x_last - min_disparity - j;
+      if (xr >= 0 && xr < width) out.right_best[xr] = static_cast<int16_t>(lanes[j]);
+    }
+  };
+  for (int x = 0; x < width; ++x) {
+    const uint16_t* s = sum_row + static_cast<size_t>(x) * padded;
+    V costs[kVectors];
+    for (int v = 0; v < kVectors; ++v) costs[v] = hn::LoadU(d, s + v * n);
+    V mn = costs[0];
+    for (int v = 1; v < kVectors; ++v) mn = hn::Min(mn, costs[v]);
+    const uint16_t best_cost = SmallestLane(d, mn);
+    const V best_cost_v = hn::Set(d, best_cost);
+    V index = all_ones;
+    for (int v = 0; v < kVectors; ++v) {
+      index = hn::Min(index, hn::IfThenElse(hn::Eq(costs[v], best_cost_v), iota[v], all_ones));
+    }
+    const int best = SmallestLane(d, index);
+    // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are
+    // excluded.
+    const V low = hn::Set(d, static_cast<uint16_t>(best - 1));
+    V second = all_ones;
+    for (int v = 0; v < kVectors; ++v) {
+      const V offset = hn::Sub(iota[v], low);
+      second =
+          hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), second, hn::Min(second, costs[v]));
+    }
+    out.best[x] = static_cast<int16_t>(best);
+    out.best_cost[x] = best_cost;
+    out.second_cost[x] = SmallestLane(d, second);
+    // Right view: every lane moves up by one, then lanes k < padded take S(x, k) when smaller.
+    run_cost[kVectors] = ShiftUpOneLane(d, run_cost[kVectors], run_cost[kVectors - 1]);
+    run_k[kVectors] = ShiftUpOneLane(d, run_k[kVectors], run_k[kVectors - 1]);
+    for (int v = kVectors - 1; v >= 0; --v) {
+      const V cost = ShiftUpOneLane(d, run_cost[v], v > 0 ? run_cost[v - 1] : all_ones);
+      const V k = ShiftUpOneLane(d, run_k[v], v > 0 ? run_k[v - 1] : all_ones);
+      run_k[v] = hn::IfThenElse(hn::Lt(costs[v], cost), iota[v], k);
+      run_cost[v] = hn::Min(costs[v], cost);
+    }
+    if ((x + 1) % n == 0) emit(kVectors, x);
+  }
+  emit(0, width - 1);
+}
+#endif
+
 void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_disparities,
                            int min_disparity, WtaRow out, uint16_t* right_cost_scratch) {
   const hn::ScalableTag<uint16_t> d;
-  const size_t n = hn::Lanes(d);
+  const int n = static_cast<int>(hn::Lanes(d));
   const int padded = PaddedDisparities(num_disparities);
+  const auto all_ones = hn::Set(d, uint16_t{0xFFFF});
+  const auto two = hn::Set(d, uint16_t{2});
+  std::fill(out.right_best, out.right_best + width, int16_t{-1});
+#if LINESIGHT_SGM_SHIFT_REGISTER
+  switch (padded / n) {
+#define LINESIGHT_SGM_WTA_CASE(count)                                      \
+  case count:                                                              \
+    WinnerTakesAllRowRegisters<count>(sum_row, width, min_disparity, out); \
+    return;
+    LINESIGHT_SGM_WTA_CASE(2)
+    LINESIGHT_SGM_WTA_CASE(4)
+    LINESIGHT_SGM_WTA_CASE(6)
+    LINESIGHT_SGM_WTA_CASE(8)
+#undef LINESIGHT_SGM_WTA_CASE
+    default:
+      break;
+  }
+#endif
+#if LINESIGHT_SGM_SHIFT_REGISTER
+  // Running right minima and their k: padded / n + 1 vectors each (aligned, in the scratch).
+  const int vectors = padded / n;
+  uint16_t* run_cost = right_cost_scratch;
+  uint16_t* run_k = right_cost_scratch + padded + n;
+  std::fill(run_cost, run_cost + 2 * (padded + n), uint16_t{0xFFFF});
+  auto emit = [&](int first_lane, int count, int x_last) HWY_ATTR {
+    // Lane j holds right pixel x_last - min_disparity - j.
+    for (int j = first_lane; j < first_lane + count; ++j) {
+      const int xr = x_last - min_disparity - j;
+      if (xr >= 0 && xr < width) out.right_best[xr] = static_cast<int16_t>(run_k[j]);
+    }
+  };
+#else
   const size_t reversed = static_cast<size_t>(width) + padded + 64;
   uint16_t* right_cost = right_cost_scratch;
   uint16_t* right_best = right_cost_scratch + reversed;
   std::fill(right_cost, right_cost + reversed, uint16_t{0xFFFF});
   std::fill(right_best, right_best + reversed, uint16_t{0xFFFF});
-  const auto all_ones = hn::Set(d, uint16_t{0xFFFF});
-  const auto two = hn::Set(d, uint16_t{2});
+#endif
   for (int x = 0; x < width; ++x) {
     const uint16_t* s = sum_row + static_cast<size_t>(x) * padded;
-    auto mn = all_ones;
-    for (int k = 0; k < padded; k += static_cast<int>(n)) mn = hn::Min(mn, hn::LoadU(d, s + k));
-    const auto best_cost_v = hn::MinOfLanes(d, mn);
-    const uint16_t best_cost = hn::GetLane(best_cost_v);
-    int best = 0;
-    for (int k = 0; k < padded; k += static_cast<int>(n)) {
+    auto mn = hn::LoadU(d, s);
+    for (int k = n; k < padded; k += n) mn = hn::Min(mn, hn::LoadU(d, s + k));
+    const uint16_t best_cost = SmallestLane(d, mn);
+    const auto best_cost_v = hn::Set(d, best_cost);
+    // Branch-free: which vector holds the winner is unpredictable.
+    int best = padded;
+    for (int k = 0; k < padded; k += n) {
       const intptr_t idx = hn::FindFirstTrue(d, hn::Eq(hn::LoadU(d, s + k), best_cost_v));
-      if (idx >= 0) {
-        best = k + static_cast<int>(idx);
-        break;
-      }
+      const int candidate = idx >= 0 ? k + static_cast<int>(idx) : padded;
+      best = std::min(best, candidate);
     }
     // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are
     // excluded.
     const auto low = hn::Set(d, static_cast<uint16_t>(best - 1));
     auto second = all_ones;
-    for (int k = 0; k < padded; k += static_cast<int>(n)) {
-      auto v = hn::LoadU(d, s + k);
-      if (k <= best + 1 && best - 1 < k + static_cast<int>(n)) {
-        const auto offset = hn::Sub(hn::Iota(d, static_cast<uint16_t>(k)), low);
-        v = hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), all_ones, v);
-      }
-      second = hn::Min(second, v);
+    for (int k = 0; k < padded; k += n) {
+      const auto v = hn::LoadU(d, s + k);
+      const auto offset = hn::Sub(hn::Iota(d, static_cast<uint16_t>(k)), low);
+      second = hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), second, hn::Min(second, v));
     }
     out.best[x] = static_cast<int16_t>(best);
     out.best_cost[x] = best_cost;
-    out.second_cost[x] = hn::GetLane(hn::MinOfLanes(d, second));
+    out.second_cost[x] = SmallestLane(d, second);
+#if LINESIGHT_SGM_SHIFT_REGISTER
+    // The top vector only shifts; the others shift and take S(x, k) where it is smaller.
+    hn::StoreU(
+        ShiftUpOneLane(d, hn::LoadU(d, run_cost + padded), hn::LoadU(d, run_cost + padded - n)), d,
+        run_cost + padded);
+    hn::StoreU(ShiftUpOneLane(d, hn::LoadU(d, run_k + padded), hn::LoadU(d, run_k + padded - n)), d,
+               run_k + padded);
+    for (int v = vectors - 1; v >= 0; --v) {
+      const int k = v * n;
+      const auto below_cost = v > 0 ? hn::LoadU(d, run_cost + k - n) : all_ones;
+      const auto below_k = v > 0 ? hn::LoadU(d, run_k + k - n) : all_ones;
+      const auto cost = ShiftUpOneLane(d, hn::LoadU(d, run_cost + k), below_cost);
+      const auto kk = ShiftUpOneLane(d, hn::LoadU(d, run_k + k), below_k);
+      const auto candidate = hn::LoadU(d, s + k);
+      hn::StoreU(hn::Min(candidate, cost), d, run_cost + k);
+      hn::StoreU(hn::IfThenElse(hn::Lt(candidate, cost), hn::Iota(d, static_cast<uint16_t>(k)), kk),
+                 d, run_k + k);
+    }
+    if ((x + 1) % n == 0) emit(padded, n, x);
+#else
     // Right view: index i = width - 1 - x + k holds right pixel width - 1 - min_disparity - i.
     uint16_t* rc = right_cost + (width - 1 - x);
     uint16_t* rb = right_best + (width - 1 - x);
-    for (int k = 0; k < padded; k += static_cast<int>(n)) {
+    for (int k = 0; k < padded; k += n) {
       const auto v = hn::LoadU(d, s + k);
       const auto old = hn::LoadU(d, rc + k);
       const auto better = hn::Lt(v, old);
@@ -525,7 +796,11 @@ void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_dispariti
           hn::IfThenElse(better, hn::Iota(d, static_cast<uint16_t>(k)), hn::LoadU(d, rb + k)), d,
           rb + k);
     }
+#endif
   }
+#if LINESIGHT_SGM_SHIFT_REGISTER
+  emit(0, padded + n, width - 1);
+#else
   for (int xr = 0; xr < width; ++xr) {
     const long i = static_cast<long>(width) - 1 - min_disparity - xr;
     int16_t value = -1;
@@ -534,6 +809,7 @@ void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_dispariti
     }
     out.right_best[xr] = value;
   }
+#endif
 }
 
 }  // namespace HWY_NAMESPACE

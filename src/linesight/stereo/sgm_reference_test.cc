@@ -348,6 +348,19 @@ std::vector<Config> Configs() {
   small.census_width = 5;
   small.census_height = 5;
   configs.push_back(small);
+  // Wide disparity ranges: 6 and 10 vectors of 32 lanes per pixel (the register and the generic
+  // winner-takes-all of AVX-512), a negative range start.
+  Config wide = small;
+  wide.width = 97;
+  wide.height = 15;
+  wide.min_disparity = -60;
+  wide.num_disparities = 170;
+  wide.threads = 2;
+  configs.push_back(wide);
+  wide.min_disparity = -150;
+  wide.num_disparities = 300;
+  wide.paths = 4;
+  configs.push_back(wide);
   return configs;
 }
 

@@ -100,7 +100,9 @@ struct AggregationInput {
 };
 
 // Partial sums of the sweep that reaches a row first: height rows of width pixels of
-// PaddedDisparities() uint16 lanes (the only full-size buffer of the matcher).
+// PaddedDisparities() uint16 lanes (the only full-size buffer of the matcher). With uint8 path
+// costs each vector's worth of disparities is stored as the sums of its even disparities, then of
+// its odd ones (an internal layout of AggregatePaths; the final rows handed out are in order).
 struct SumVolume {
   int width = 0;
   int height = 0;
@@ -123,6 +125,7 @@ inline bool UsesNarrowPathCosts(const AggregationInput& input) {
 struct SweepScratch {
   AlignedVector<uint8_t> buffers;  // path costs (uint8 or uint16 lanes, see UsesNarrowPathCosts)
   AlignedVector<uint64_t> census_reversed;
+  AlignedVector<uint8_t> planes_reversed;  // byte planes of census_reversed (uint8 path costs)
   AlignedVector<uint16_t> bt_reversed;
   AlignedVector<uint16_t> bt_left;
   AlignedVector<uint16_t> total_row;  // final S of the row being finished
