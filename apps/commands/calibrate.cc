@@ -64,8 +64,10 @@ int RunCalibrate(int argc, char** argv) {
                "also estimate k4 k5 k6 (rational model)");
   app.add_flag("--fix-k3", options.distortion.fix_k3, "hold k3 = 0");
   app.add_flag("--zero-tangent", options.distortion.zero_tangential, "hold p1 = p2 = 0");
-  app.add_option("--recon-point-weight", options.recon_point_weight,
-                 "recon: weight w_p of the 3D point term")
+  app.add_option(
+         "--recon-point-weight", options.recon_point_weight,
+         "recon: share w_p² (w_p in [0, 1]) of each stereo corner's information taken through its "
+         "whitened 3D reconstruction error")
       ->capture_default_str();
   app.add_option("--recon-distance-weight", options.recon_distance_weight,
                  "recon: weight w_d of the adjacent-distance term")

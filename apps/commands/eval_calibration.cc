@@ -47,7 +47,8 @@ int RunEvalCalibration(int argc, char** argv) {
   app.add_option("--seed", options.seed, "random seed")->capture_default_str();
   app.add_flag("--estimate-k3", estimate_k3,
                "estimate k3 too (default: k1 k2 p1 p2, k3 held at its true 0)");
-  app.add_option("--recon-point-weight", options.calibration.recon_point_weight, "recon: w_p")
+  app.add_option("--recon-point-weight", options.calibration.recon_point_weight,
+                 "recon: w_p in [0, 1]")
       ->capture_default_str();
   app.add_option("--recon-distance-weight", options.calibration.recon_distance_weight, "recon: w_d")
       ->capture_default_str();

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <limits>
 #include <map>
 
 #include <opencv2/aruco/charuco.hpp>
@@ -195,12 +196,26 @@ Detection DetectPattern(const cv::Mat& gray, const PatternSpec& spec,
       } else {
         found = cv::findChessboardCorners(
             gray, grid, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-        if (found)
-          cv::cornerSubPix(gray, corners, subpix_window, cv::Size(-1, -1), subpix_criteria);
       }
       if (!found) {
         detection.reason = fmt::format("no {}x{} chessboard found", spec.cols, spec.rows);
         return detection;
+      }
+      if (!options.sector_based || options.refine_sector_based) {
+        // The window must not reach the neighbouring corners.
+        double spacing = std::numeric_limits<double>::infinity();
+        for (int r = 0; r < spec.rows; ++r) {
+          for (int c = 0; c < spec.cols; ++c) {
+            const cv::Point2f& p = corners[r * spec.cols + c];
+            if (c + 1 < spec.cols)
+              spacing = std::min(spacing, cv::norm(corners[r * spec.cols + c + 1] - p));
+            if (r + 1 < spec.rows)
+              spacing = std::min(spacing, cv::norm(corners[(r + 1) * spec.cols + c] - p));
+          }
+        }
+        const int half = std::max(
+            2, std::min(options.subpixel_half_window, static_cast<int>(std::floor(0.4 * spacing))));
+        cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1), subpix_criteria);
       }
       fill_all();
       return detection;

@@ -12,10 +12,11 @@
 #include "linesight/core/error.h"
 
 namespace linesight::calib {
+
 namespace {
 
+using detail::ReconCornerResidual;
 using detail::ReconstructionDistanceResidual;
-using detail::ReconstructionPointResidual;
 using detail::ReprojectionResidual;
 using detail::StereoReprojectionResidual;
 
@@ -125,6 +126,8 @@ Pose MeanRightFromLeft(const std::vector<Pose>& per_view) {
 // The joint refinement of zhang and recon (see the header for the objective).
 void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& options,
                  bool recon_terms, StereoCalibrationResult* result) {
+  const bool recon_corners = recon_terms && options.recon_point_weight > 0;
+  const bool recon_distances = recon_terms && options.recon_distance_weight > 0;
   ceres::Problem problem;
   double* left_intrinsics = result->left.params.data();
   double* right_intrinsics = result->right.params.data();
@@ -139,17 +142,30 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
     const ViewObservations& right = obs.right[v];
     if (!left.empty() && result->left_from_board[v]) {
       double* pose = result->left_from_board[v]->params.data();
+      // Corners both cameras saw become recon corner terms; the others keep plain reprojection.
+      std::map<int, Eigen::Vector2d> right_by_id;
+      for (size_t k = 0; k < right.ids.size(); ++k) right_by_id[right.ids[k]] = right.pixels[k];
+      std::map<int, bool> as_recon_corner;
+      for (size_t k = 0; k < left.ids.size() && recon_corners; ++k) {
+        const auto it = right_by_id.find(left.ids[k]);
+        if (it == right_by_id.end()) continue;
+        problem.AddResidualBlock(
+            ReconCornerResidual::Create(left.pixels[k], it->second, board.points[left.ids[k]],
+                                        options.recon_point_weight),
+            nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
+        as_recon_corner[left.ids[k]] = true;
+      }
       for (size_t k = 0; k < left.ids.size(); ++k) {
+        if (as_recon_corner.count(left.ids[k])) continue;
         problem.AddResidualBlock(
             ReprojectionResidual::Create(left.pixels[k], board.points[left.ids[k]]), nullptr,
             left_intrinsics, pose);
       }
-      if (!right.empty()) {
-        for (size_t k = 0; k < right.ids.size(); ++k) {
-          problem.AddResidualBlock(
-              StereoReprojectionResidual::Create(right.pixels[k], board.points[right.ids[k]]),
-              nullptr, right_intrinsics, pose, right_from_left);
-        }
+      for (size_t k = 0; k < right.ids.size(); ++k) {
+        if (as_recon_corner.count(right.ids[k])) continue;
+        problem.AddResidualBlock(
+            StereoReprojectionResidual::Create(right.pixels[k], board.points[right.ids[k]]),
+            nullptr, right_intrinsics, pose, right_from_left);
       }
     } else if (!right.empty() && result->right_only_from_board[v]) {
       double* pose = result->right_only_from_board[v]->params.data();
@@ -159,8 +175,7 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
             right_intrinsics, pose);
       }
     }
-    if (!recon_terms || !obs.IsPair(v) || !result->left_from_board[v]) continue;
-    // Corners seen by both cameras of this pair view.
+    if (!recon_distances || !obs.IsPair(v) || !result->left_from_board[v]) continue;
     std::map<int, Eigen::Vector2d> right_by_id;
     for (size_t k = 0; k < right.ids.size(); ++k) right_by_id[right.ids[k]] = right.pixels[k];
     std::map<int, std::pair<Eigen::Vector2d, Eigen::Vector2d>> common;
@@ -168,30 +183,19 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
       const auto it = right_by_id.find(left.ids[k]);
       if (it != right_by_id.end()) common[left.ids[k]] = {left.pixels[k], it->second};
     }
-    double* pose = result->left_from_board[v]->params.data();
     const Pose& left_from_board = *result->left_from_board[v];
-    if (options.recon_point_weight > 0) {
-      for (const auto& [id, pixels] : common) {
-        problem.AddResidualBlock(
-            ReconstructionPointResidual::Create(pixels.first, pixels.second, board.points[id],
-                                                options.recon_point_weight),
-            nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
-      }
-    }
-    if (options.recon_distance_weight > 0) {
-      for (const AdjacentPair& pair : board.adjacent) {
-        const auto a = common.find(pair.a);
-        const auto b = common.find(pair.b);
-        if (a == common.end() || b == common.end()) continue;
-        const double depth = std::max(0.5 * (left_from_board.Apply(board.points[pair.a]).z() +
-                                             left_from_board.Apply(board.points[pair.b]).z()),
-                                      1e-6);
-        problem.AddResidualBlock(
-            ReconstructionDistanceResidual::Create(
-                a->second.first, a->second.second, b->second.first, b->second.second,
-                pair.distance_m, options.recon_distance_weight * f0 / depth),
-            nullptr, left_intrinsics, right_intrinsics, right_from_left);
-      }
+    for (const AdjacentPair& pair : board.adjacent) {
+      const auto a = common.find(pair.a);
+      const auto b = common.find(pair.b);
+      if (a == common.end() || b == common.end()) continue;
+      const double depth = std::max(0.5 * (left_from_board.Apply(board.points[pair.a]).z() +
+                                           left_from_board.Apply(board.points[pair.b]).z()),
+                                    1e-6);
+      problem.AddResidualBlock(
+          ReconstructionDistanceResidual::Create(a->second.first, a->second.second, b->second.first,
+                                                 b->second.second, pair.distance_m,
+                                                 options.recon_distance_weight * f0 / depth),
+          nullptr, left_intrinsics, right_intrinsics, right_from_left);
     }
   }
   HoldFixedIntrinsics(&problem, left_intrinsics, options.distortion);
@@ -396,9 +400,9 @@ void StereoCalibrationOptions::Check() const {
   CheckOption(function_tolerance > 0 && function_tolerance < 1,
               "StereoCalibrationOptions.function_tolerance", function_tolerance,
               "must be in (0, 1)");
-  CheckOption(recon_point_weight >= 0 && std::isfinite(recon_point_weight),
+  CheckOption(recon_point_weight >= 0 && recon_point_weight <= 1,
               "StereoCalibrationOptions.recon_point_weight", recon_point_weight,
-              "must be finite and >= 0");
+              "must be in [0, 1]");
   CheckOption(recon_distance_weight >= 0 && std::isfinite(recon_distance_weight),
               "StereoCalibrationOptions.recon_distance_weight", recon_distance_weight,
               "must be finite and >= 0");
