@@ -115,9 +115,14 @@ void PrepareCostRow(const CostInput& in, int y, int padded,
   const size_t n = ReversedSize(in, padded);
   census_reversed->assign(n, 0);
   const uint64_t* census_right = in.census_right + static_cast<size_t>(y) * w;
-  for (size_t i = 0; i < n; ++i) {
-    const long xr = static_cast<long>(w) - 1 - in.min_disparity - static_cast<long>(i);
-    if (xr >= 0 && xr < w) (*census_reversed)[i] = census_right[xr];
+  // Index i holds right pixel w - 1 - min_disparity - i, which is inside the image for i in
+  // [-min_disparity, w - min_disparity).
+  const long first = std::max(0L, -static_cast<long>(in.min_disparity));
+  const long last = std::min(static_cast<long>(n), static_cast<long>(w) - in.min_disparity);
+  if (first < last) {
+    std::reverse_copy(census_right + (w - in.min_disparity - last),
+                      census_right + (w - in.min_disparity - first),
+                      census_reversed->data() + first);
   }
   ctx->input = &in;
   ctx->padded = padded;
