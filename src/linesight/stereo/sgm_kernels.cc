@@ -257,9 +257,22 @@ HWY_INLINE void PixelCost(const CostRowContext& ctx, int x, T* HWY_RESTRICT out)
   const T max_cost = static_cast<T>(ctx.max_cost);
   const int num = in.num_disparities;
   const int first_left_out = std::max(0, x - in.min_disparity + 1);
-  for (int k = first_left_out; k < num; ++k) out[k] = max_cost;
   const int last_right_out = std::min(num, x - in.min_disparity - in.width + 1);
-  for (int k = 0; k < last_right_out; ++k) out[k] = max_cost;
+  if (first_left_out < num || last_right_out > 0) {
+    // Lanes k >= first_left_out or k < last_right_out, a vector at a time (lanes >= num are
+    // unspecified and may take max_cost too).
+    const hn::ScalableTag<T> dt;
+    const int nt = static_cast<int>(hn::Lanes(dt));
+    const auto max_v = hn::Set(dt, max_cost);
+    for (int k = 0; k < padded; k += nt) {
+      const size_t inside_left = static_cast<size_t>(std::clamp(first_left_out - k, 0, nt));
+      const size_t outside_right = static_cast<size_t>(std::clamp(last_right_out - k, 0, nt));
+      if (inside_left == static_cast<size_t>(nt) && outside_right == 0) continue;
+      const auto out_of_image =
+          hn::Or(hn::Not(hn::FirstN(dt, inside_left)), hn::FirstN(dt, outside_right));
+      hn::StoreU(hn::IfThenElse(out_of_image, max_v, hn::LoadU(dt, out + k)), dt, out + k);
+    }
+  }
 }
 
 void MatchingCostRowImpl(const CostInput& in, int y, uint16_t* out) {
