@@ -497,6 +497,8 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
 // Sweep steps [step_begin, step_end): step t is row t (forward) or row height-1-t (backward).
 // Forward paths come from the left, top, top-left and top-right; backward paths from the right,
 // bottom, bottom-right, bottom-left.
+// Pixels ahead at which the second sweep prefetches the other sweep's partial sums.
+constexpr int kPrefetchPixels = 4;
 template <typename T, int kPaths, bool kAdd>
 void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end,
                 const uint16_t* p2_table, SumVolume* sum, T* base, SweepScratch* scratch,
@@ -531,8 +533,9 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
     uint16_t* total_row = scratch->total_row.data();
     for (int i = 0; i < w; ++i) {
       const int x = direction > 0 ? i : w - 1 - i;
-      if (kAdd && i + 4 < w) {
-        const uint16_t* ahead = partial_row + static_cast<size_t>(x + 4 * direction) * padded;
+      if (kAdd && i + kPrefetchPixels < w) {
+        const uint16_t* ahead =
+            partial_row + static_cast<size_t>(x + kPrefetchPixels * direction) * padded;
         for (int line = 0; line < padded; line += 32) hwy::Prefetch(ahead + line);
       }
       PixelCost<T>(ctx, x, cost);
