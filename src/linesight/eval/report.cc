@@ -362,7 +362,19 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
       "intensities: gauss = variance, sp = salt-and-pepper density). Headline error of each set "
       "(dense %), averaged per set and then over the sets each method ran on ({}). {}\n\n",
       fmt::join(sets, ", "), gc_note);
-  auto table = [&](const std::string& only_set) {
+  // Scenes on which every method ran at every setting: the only fair ground for one summary row
+  // per method when a method (gc) skipped some sets.
+  std::set<std::string> common;
+  bool first = true;
+  for (const std::string& method : methods) {
+    for (const std::string& l : labels) {
+      const auto these = ScenesOf(noisy, method, l);
+      common = first ? these : Intersect(common, these);
+      first = false;
+    }
+  }
+  const bool complete = common.size() == UniqueInOrder(noisy, SceneKey).size();
+  auto table = [&](const std::string& only_set, const std::set<std::string>* only) {
     std::string t = "| method |";
     for (const std::string& l : labels) t += " " + l + " |";
     t += "\n|---|";
@@ -371,19 +383,37 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
     for (const std::string& method : methods) {
       t += "| " + method + " |";
       for (const std::string& l : labels) {
-        t += fmt::format(" {} |", Num(MeanHeadline(noisy, method, l, nullptr, only_set)));
+        t += fmt::format(" {} |", Num(MeanHeadline(noisy, method, l, only, only_set)));
       }
       t += "\n";
     }
     return t + "\n";
   };
-  out += "**All noise sets:**\n\n" + table("");
+  std::vector<std::string> common_sets;
+  for (const std::string& key : common) {
+    const std::string set = key.substr(0, key.find('/'));
+    if (std::find(common_sets.begin(), common_sets.end(), set) == common_sets.end()) {
+      common_sets.push_back(set);
+    }
+  }
+  if (!complete && !common.empty()) {
+    out +=
+        fmt::format(
+            "**Scenes every method ran at every setting** ({} scene(s) of {}; the same scenes for "
+            "every row):\n\n",
+            common.size(), fmt::join(common_sets, ", ")) +
+        table("", &common);
+  }
+  out += std::string(complete ? "**All noise sets:**\n\n"
+                              : "**All noise sets** (each method over the scenes it ran, so "
+                                "rows with fewer sets are not comparable with the others):\n\n") +
+         table("", nullptr);
   for (const std::string& set : sets) {
     std::string label;
     for (const auto& r : noisy) {
       if (r.set == set) label = PrimaryMetricFor(r).label;
     }
-    out += fmt::format("**{}** ({}):\n\n", set, label) + table(set);
+    out += fmt::format("**{}** ({}):\n\n", set, label) + table(set, nullptr);
   }
   // Every scene: the acceptance asks for every method on every scene at every setting.
   out += "<details><summary>Per scene (headline error of the scene's set, dense %)</summary>\n\n";
@@ -414,16 +444,22 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
   LineChart chart;
   chart.title = "Headline error vs image noise";
   chart.x_label = "noise (gauss: variance, sp: density)";
-  chart.y_label = "headline bad % (mean over sets)";
+  chart.y_label = complete || common.empty() ? "headline bad % (mean over sets)"
+                                             : "headline bad % (scenes every method ran)";
   chart.x_ticks = labels;
   for (const std::string& method : methods) {
     PlotSeries series{method, {}};
-    for (const std::string& l : labels) series.y.push_back(MeanHeadline(noisy, method, l));
+    for (const std::string& l : labels) {
+      series.y.push_back(
+          MeanHeadline(noisy, method, l, complete || common.empty() ? nullptr : &common));
+    }
     chart.series.push_back(series);
   }
   WriteSvg(out_dir / "noise.svg", chart);
   out += "![headline error vs noise](noise.svg)\n\n" +
-         prov.Caption("Figure 1: headline error vs noise, one line per method");
+         prov.Caption(
+             "Figure 1: headline error vs noise, one line per method (on the scenes every method "
+             "ran when some method skipped a set)");
   return out;
 }
 
