@@ -74,10 +74,11 @@ int RunRange(int argc, char** argv) {
     if (!disparity_out.empty()) WritePfm(disparity_out, frame.disparity);
 
     const DisparityRange range = pipeline.disparity_range();
+    const DisparityRange searched = pipeline.search_range();
     std::cout << fmt::format(
-        "method {}, depths {}..{} m -> disparities {}..{} ({} searched), {:.0f} ms\n",
+        "method {}, depths {}..{} m -> disparities {}..{} (searched {}..{}), {:.0f} ms\n",
         pipeline.method(), options.min_depth_m, options.max_depth_m, range.min_disparity,
-        range.max_disparity(), range.num_disparities, match_ms);
+        range.max_disparity(), searched.min_disparity, searched.max_disparity(), match_ms);
     std::cout << fmt::format("{:>3}  {:>6}  {:<20} {:>10} {:>9} {:>7}  {}\n", "#", "source", "box",
                              "distance_m", "sigma_m", "valid%", "note");
     nlohmann::json report;

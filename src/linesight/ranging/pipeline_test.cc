@@ -54,7 +54,9 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   }
   // (A handful of pixels can differ: the d <= x rule cuts the dense and checked values separately.)
   EXPECT_LE(checked_not_dense, checked / 1000);
-  EXPECT_LT(checked, dense / 2);  // sky, terrain and unmatched borders are left out
+  // Searching from disparity 0, the terrain matches at its true disparity and passes the checks;
+  // sky, occlusions and unmatched borders are left out.
+  EXPECT_LT(checked, dense * 95 / 100);
   EXPECT_GT(checked, dense / 10);
   const RangeResult r = pipeline.RangeRois(frame, {roi}).front();
   ASSERT_TRUE(r.ok()) << r.reason;
