@@ -1,18 +1,16 @@
 // linesight eval <study>: `stereo` (benchmarks), `calibration` and `ranging` (simulation studies).
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <iostream>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include "cli.h"
 #include "commands.h"
-#include "linesight/core/atomic_file.h"
 #include "linesight/core/error.h"
 #include "linesight/core/progress.h"
 #include "linesight/eval/eval_stereo.h"
-#include "linesight/io/json_io.h"
 #include "linesight/stereo/matcher.h"
 
 namespace linesight::cli {
@@ -84,11 +82,7 @@ int RunEvalStereo(int argc, char** argv) {
         "eval stereo");
     const EvalStereoReport report = RunEvalStereo(scenes, options, &progress);
     progress.Finish();
-    const std::string markdown = report.ToMarkdown();
-    std::cout << markdown << std::flush;
-    if (!markdown_path.empty()) WriteTextAtomic(markdown_path, markdown);
-    if (!json_path.empty()) WriteJson(json_path, report.ToJson());
-    if (!plots_dir.empty()) report.WritePlots(plots_dir);
+    EmitReport(report, json_path, markdown_path, plots_dir);
   });
 }
 

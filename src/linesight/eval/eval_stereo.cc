@@ -1,6 +1,7 @@
 #include "linesight/eval/eval_stereo.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <set>
 
@@ -285,7 +286,10 @@ std::string MethodByNoiseTable(
   out += "\n";
   for (const std::string& method : methods) {
     out += "| " + method + " |";
-    for (const std::string& noise : noises) out += fmt::format(" {:.2f} |", value(method, noise));
+    for (const std::string& noise : noises) {
+      const double v = value(method, noise);
+      out += std::isnan(v) ? std::string(" – |") : fmt::format(" {:.2f} |", v);
+    }
     out += "\n";
   }
   return out;

@@ -72,7 +72,7 @@ std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, s
 uint64_t NoiseSeedFor(const std::string& key, uint64_t seed);
 
 // Markdown table with a row per method and a column per noise setting; value(method, noise) fills
-// the cells (two decimals).
+// the cells (two decimals; NaN, a setting the method did not run, prints "–").
 std::string MethodByNoiseTable(
     const std::vector<std::string>& methods, const std::vector<std::string>& noises,
     const std::function<double(const std::string& method, const std::string& noise)>& value);

@@ -375,19 +375,11 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
   }
   const bool complete = common.size() == UniqueInOrder(noisy, SceneKey).size();
   auto table = [&](const std::string& only_set, const std::set<std::string>* only) {
-    std::string t = "| method |";
-    for (const std::string& l : labels) t += " " + l + " |";
-    t += "\n|---|";
-    for (size_t i = 0; i < labels.size(); ++i) t += "---|";
-    t += "\n";
-    for (const std::string& method : methods) {
-      t += "| " + method + " |";
-      for (const std::string& l : labels) {
-        t += fmt::format(" {} |", Num(MeanHeadline(noisy, method, l, only, only_set)));
-      }
-      t += "\n";
-    }
-    return t + "\n";
+    return MethodByNoiseTable(methods, labels,
+                              [&](const std::string& method, const std::string& l) {
+                                return MeanHeadline(noisy, method, l, only, only_set);
+                              }) +
+           "\n";
   };
   std::vector<std::string> common_sets;
   for (const std::string& key : common) {
