@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include <ceres/ceres.h>
 #include <Eigen/Dense>
@@ -140,20 +141,28 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
   for (size_t v = 0; v < obs.size(); ++v) {
     const ViewObservations& left = obs.left[v];
     const ViewObservations& right = obs.right[v];
+    // Corners both cameras saw in this view: id -> (left pixel, right pixel).
+    std::map<int, std::pair<Eigen::Vector2d, Eigen::Vector2d>> common;
+    {
+      std::map<int, Eigen::Vector2d> right_by_id;
+      for (size_t k = 0; k < right.ids.size(); ++k) right_by_id[right.ids[k]] = right.pixels[k];
+      for (size_t k = 0; k < left.ids.size(); ++k) {
+        const auto it = right_by_id.find(left.ids[k]);
+        if (it != right_by_id.end()) common[left.ids[k]] = {left.pixels[k], it->second};
+      }
+    }
     if (!left.empty() && result->left_from_board[v]) {
       double* pose = result->left_from_board[v]->params.data();
       // Corners both cameras saw become recon corner terms; the others keep plain reprojection.
-      std::map<int, Eigen::Vector2d> right_by_id;
-      for (size_t k = 0; k < right.ids.size(); ++k) right_by_id[right.ids[k]] = right.pixels[k];
-      std::map<int, bool> as_recon_corner;
+      std::set<int> as_recon_corner;
       for (size_t k = 0; k < left.ids.size() && recon_corners; ++k) {
-        const auto it = right_by_id.find(left.ids[k]);
-        if (it == right_by_id.end()) continue;
+        const auto it = common.find(left.ids[k]);
+        if (it == common.end()) continue;
         problem.AddResidualBlock(
-            ReconCornerResidual::Create(left.pixels[k], it->second, board.points[left.ids[k]],
-                                        options.recon_point_weight),
+            ReconCornerResidual::Create(left.pixels[k], it->second.second,
+                                        board.points[left.ids[k]], options.recon_point_weight),
             nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
-        as_recon_corner[left.ids[k]] = true;
+        as_recon_corner.insert(left.ids[k]);
       }
       for (size_t k = 0; k < left.ids.size(); ++k) {
         if (as_recon_corner.count(left.ids[k])) continue;
@@ -176,13 +185,6 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
       }
     }
     if (!recon_distances || !obs.IsPair(v) || !result->left_from_board[v]) continue;
-    std::map<int, Eigen::Vector2d> right_by_id;
-    for (size_t k = 0; k < right.ids.size(); ++k) right_by_id[right.ids[k]] = right.pixels[k];
-    std::map<int, std::pair<Eigen::Vector2d, Eigen::Vector2d>> common;
-    for (size_t k = 0; k < left.ids.size(); ++k) {
-      const auto it = right_by_id.find(left.ids[k]);
-      if (it != right_by_id.end()) common[left.ids[k]] = {left.pixels[k], it->second};
-    }
     const Pose& left_from_board = *result->left_from_board[v];
     for (const AdjacentPair& pair : board.adjacent) {
       const auto a = common.find(pair.a);
