@@ -225,6 +225,43 @@ std::string ValidPfm() {
   return pfm;
 }
 
+TEST_F(CliTest, AcquireRecordsPairsFromAnImageSequence) {
+  for (int i = 0; i < 3; ++i) {
+    WritePair(dir_ / ("l" + std::to_string(i) + ".png"), dir_ / ("r" + std::to_string(i) + ".png"));
+  }
+  const fs::path out = dir_ / "rec";
+  const RunResult r =
+      Run("acquire --source 'images:" + (dir_ / "l*.png").string() + "," +
+          (dir_ / "r*.png").string() + "' --frames 5 --every 2 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 pairs"), std::string::npos) << r.out;  // pairs 0 and 2 of 3
+  EXPECT_TRUE(fs::exists(out / "left_0000.png"));
+  EXPECT_TRUE(fs::exists(out / "right_0001.png"));
+  EXPECT_FALSE(fs::exists(out / "left_0002.png"));
+}
+
+TEST_F(CliTest, ServeAndAcquireNameABadSource) {
+  RunResult r = Run("serve --source webcam:0 --port 0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown scheme 'webcam'"), std::string::npos) << r.err;
+  r = Run("serve --source v4l2:/dev/video987 --port 0");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("no such camera /dev/video987"), std::string::npos) << r.err;
+  WritePair(dir_ / "l.png", dir_ / "r.png");
+  r = Run("serve --source pair:" + (dir_ / "l.png").string() + "," + (dir_ / "r.png").string() +
+          " --port 0");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("give --calib"), std::string::npos) << r.err;
+  r = Run("serve --source synthetic --no-auto");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--no-auto needs at least one --roi"), std::string::npos) << r.err;
+  r = Run("acquire --source sbs:" + (dir_ / "missing.avi").string() + " --out " +
+          (dir_ / "rec").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("missing.avi"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "rec"));
+}
+
 TEST_F(CliTest, CloudWorksOnValidInputs) {
   std::ofstream(dir_ / "stereo.yml") << ValidCalibrationYaml();
   std::ofstream(dir_ / "d.pfm", std::ios::binary) << ValidPfm();

@@ -35,6 +35,10 @@ constexpr Subcommand kSubcommands[] = {
      "stereo calibration from board images (zhang | recon | opencv)"},
     {"pattern", linesight::cli::RunPattern,
      "render an LCD calibration target with its exact square size"},
+    {"serve", linesight::cli::RunServe,
+     "base station: live ranging of a camera / video / synthetic stream, web page + JSON API"},
+    {"acquire", linesight::cli::RunAcquire,
+     "record stereo pairs from a camera, video or the synthetic scene (e.g. calibration views)"},
 };
 
 void PrintUsage(std::FILE* out) {

@@ -1,0 +1,157 @@
+// linesight serve: the base station. Ranges a live stereo stream and serves the web page and JSON
+// API (src/linesight/server/base_station.h) that show it.
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "cli.h"
+#include "commands.h"
+#include "linesight/acquire/frame_source.h"
+#include "linesight/core/error.h"
+#include "linesight/core/progress.h"
+#include "linesight/io/image_io.h"
+#include "linesight/io/stereo_calibration.h"
+#include "linesight/ranging/ranging.h"
+#include "linesight/server/base_station.h"
+
+namespace linesight::cli {
+namespace {
+
+BaseStationServer* g_server = nullptr;
+
+extern "C" void StopOnSignal(int) {
+  if (g_server) g_server->Stop();
+}
+
+}  // namespace
+
+// Shared by serve and acquire: --source and the capture options.
+void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options) {
+  app.add_option("--source", *spec,
+                 fmt::format("where pairs come from: {}", fmt::join(FrameSourceSchemes(), " | ")))
+      ->required();
+  app.add_option("--width", options->width, "camera frame width (px; 0 = device default)");
+  app.add_option("--height", options->height, "camera frame height (px; 0 = device default)");
+  app.add_option("--fps", options->fps, "camera frame rate (0 = device default)");
+  app.add_flag("--loop", options->loop, "start image sequences and videos again at their end");
+  app.add_option(
+      "--synthetic-obstacles", options->synthetic_obstacles,
+      "synthetic source: type:distance_m,... (default damper:1.5,clamp:3,insulator:4.5)");
+  app.add_option("--synthetic-supersampling", options->synthetic_supersampling,
+                 "synthetic source: rays per pixel side (1 = fastest)")
+      ->capture_default_str();
+}
+
+int RunServe(int argc, char** argv) {
+  CLI::App app{
+      "Base station: range a live stereo stream (camera, video, images or the synthetic scene) and "
+      "serve a web page and JSON API with every obstacle's filtered distance +- sigma.",
+      "serve"};
+  std::string source_spec, calib_path, host = "127.0.0.1";
+  std::vector<std::string> roi_texts, raw_params;
+  int port = 8080;
+  bool no_auto = false;
+  FrameSourceOptions source_options;
+  BaseStationOptions options;
+  AddSourceOptions(app, &source_spec, &source_options);
+  app.add_option("--calib", calib_path,
+                 "stereo calibration (OpenCV YAML; default: the source's own, e.g. synthetic)");
+  app.add_option("--host", host, "address to listen on (0.0.0.0 = every interface)")
+      ->capture_default_str();
+  app.add_option("--port", port, "TCP port (0 = any free port)")->capture_default_str();
+  app.add_option("--roi", roi_texts, "region x,y,w,h in rectified left pixels (repeatable)");
+  app.add_flag("--no-auto", no_auto, "do not find obstacles automatically (only the ROIs)");
+  app.add_flag("--rectified", options.pipeline.input_rectified,
+               "the frames are already rectified (P1 P2 Q as given)");
+  app.add_option("--method", options.pipeline.method, "matcher (default isgm)");
+  AddParamOption(app, &raw_params);
+  app.add_option("--min-depth", options.pipeline.min_depth_m, "working range: nearest depth (m)")
+      ->capture_default_str();
+  app.add_option("--max-depth", options.pipeline.max_depth_m, "working range: farthest depth (m)")
+      ->capture_default_str();
+  app.add_option("--threads", options.pipeline.threads, "matcher threads (0 = all cores)")
+      ->capture_default_str();
+  app.add_option("--max-fps", options.max_fps, "processing rate cap (0 = as fast as possible)")
+      ->capture_default_str();
+  app.add_option("--frames", options.max_frames,
+                 "stop processing after N frames (0 = until the source ends); the page stays up")
+      ->capture_default_str();
+  app.add_option("--jpeg-quality", options.jpeg_quality, "quality of the images sent to the page")
+      ->capture_default_str();
+  return RunCommand(app, argc, argv, [&] {
+    for (const std::string& text : roi_texts) options.rois.push_back(ParseRoi(text));
+    options.auto_detect = !no_auto;
+    options.pipeline.params = ParseParams(raw_params);
+    if (options.rois.empty() && !options.auto_detect) {
+      throw UsageError("--no-auto needs at least one --roi x,y,w,h");
+    }
+    std::optional<StereoCalibration> calib;
+    if (!calib_path.empty()) calib = ReadStereoCalibration(calib_path);
+    std::fprintf(stderr, "opening %s ...\n", source_spec.c_str());
+    BaseStation station(OpenFrameSource(source_spec, source_options), calib, options);
+    BaseStationServer server(&station);
+    const int bound = server.Bind(host, port);
+    const nlohmann::json status = station.Status();
+    std::fprintf(stderr, "source: %s\ncalibration: %s\nmatcher %s over disparities %d..%d\n",
+                 status["source"].get<std::string>().c_str(),
+                 status["calibration"].get<std::string>().c_str(),
+                 status["method"].get<std::string>().c_str(),
+                 status["searched_disparities"][0].get<int>(),
+                 status["searched_disparities"][1].get<int>());
+    // The port line goes to stdout (scripts read it); everything else to stderr.
+    std::cout << fmt::format("serving http://{}:{}/ (Ctrl-C stops)", host, bound) << std::endl;
+    g_server = &server;
+    std::signal(SIGINT, StopOnSignal);
+    std::signal(SIGTERM, StopOnSignal);
+    station.Start();
+    server.Listen();
+    g_server = nullptr;
+    station.Stop();
+    if (!station.error().empty()) throw InputError(station.error());
+  });
+}
+
+int RunAcquire(int argc, char** argv) {
+  CLI::App app{
+      "Record stereo pairs from a source (camera, video, images, synthetic) as left_NNNN.png / "
+      "right_NNNN.png, e.g. calibration views.",
+      "acquire"};
+  std::string source_spec, out_dir;
+  int64_t frames = 1;
+  int every = 1;
+  FrameSourceOptions source_options;
+  AddSourceOptions(app, &source_spec, &source_options);
+  app.add_option("--out", out_dir, "output folder (created if missing)")->required();
+  app.add_option("--frames", frames, "pairs to write (>= 1)")->capture_default_str();
+  app.add_option("--every", every, "keep every N-th pair (>= 1)")->capture_default_str();
+  return RunCommand(app, argc, argv, [&] {
+    if (frames < 1) throw UsageError(fmt::format("--frames {}: must be >= 1", frames));
+    if (every < 1) throw UsageError(fmt::format("--every {}: must be >= 1", every));
+    auto source = OpenFrameSource(source_spec, source_options);
+    std::filesystem::create_directories(out_dir);
+    ProgressBar progress(frames, "acquiring");
+    int64_t written = 0;
+    while (written < frames) {
+      const std::optional<StereoFrame> frame = source->Read();
+      if (!frame) break;
+      if (frame->index % every != 0) continue;
+      const std::string stem = fmt::format("{:04d}.png", written);
+      WriteImage(std::filesystem::path(out_dir) / ("left_" + stem), frame->left);
+      WriteImage(std::filesystem::path(out_dir) / ("right_" + stem), frame->right);
+      ++written;
+      progress.Advance(1, stem);
+    }
+    progress.Finish();
+    std::cout << fmt::format("{} pairs from {} written to {}\n", written, source->Describe(),
+                             out_dir);
+    if (written == 0) throw InputError(fmt::format("{} delivered no frame", source->Describe()));
+  });
+}
+
+}  // namespace linesight::cli

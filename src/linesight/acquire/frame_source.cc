@@ -1,0 +1,455 @@
+#include "linesight/acquire/frame_source.h"
+
+#include <glob.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <utility>
+
+#include <fmt/format.h>
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include "linesight/core/error.h"
+#include "linesight/io/image_io.h"
+#include "linesight/sim/power_line_scene.h"
+
+namespace linesight {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// "a,b" -> {"a", "b"}; throws UsageError naming the source unless there are `count` non-empty
+// parts (count 0 = one or two).
+std::vector<std::string> SplitParts(const std::string& spec, const std::string& body, int count) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = body.find(',', start);
+    parts.push_back(
+        body.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  const bool empty_part =
+      std::any_of(parts.begin(), parts.end(), [](const std::string& p) { return p.empty(); });
+  const bool count_ok = count == 0 ? (parts.size() == 1 || parts.size() == 2)
+                                   : static_cast<int>(parts.size()) == count;
+  if (empty_part || !count_ok) {
+    throw UsageError(fmt::format("source '{}': expected {} after the scheme", spec,
+                                 count == 2   ? "two comma-separated parts (LEFT,RIGHT)"
+                                 : count == 1 ? "one part"
+                                              : "one or two comma-separated devices"));
+  }
+  return parts;
+}
+
+std::vector<std::filesystem::path> SortedGlob(const std::string& pattern) {
+  glob_t result{};
+  std::vector<std::filesystem::path> paths;
+  if (::glob(pattern.c_str(), 0, nullptr, &result) == 0) {
+    for (size_t i = 0; i < result.gl_pathc; ++i) paths.emplace_back(result.gl_pathv[i]);
+  }
+  globfree(&result);
+  std::sort(paths.begin(), paths.end());
+  return paths;
+}
+
+void CheckPairSizes(const cv::Mat& left, const cv::Mat& right, const std::string& what) {
+  if (left.size() != right.size()) {
+    throw InputError(
+        fmt::format("{}: left frame is {}x{} but right frame is {}x{}; they must match", what,
+                    left.cols, left.rows, right.cols, right.rows));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Still images.
+// ---------------------------------------------------------------------------------------------
+
+class ImageSequenceSource final : public FrameSource {
+ public:
+  ImageSequenceSource(std::vector<std::filesystem::path> left,
+                      std::vector<std::filesystem::path> right, bool repeat, bool loop,
+                      std::string description)
+      : left_(std::move(left)),
+        right_(std::move(right)),
+        repeat_(repeat),
+        loop_(loop),
+        description_(std::move(description)) {
+    if (left_.size() != right_.size()) {
+      throw InputError(fmt::format("{}: {} left images but {} right images; they must pair up",
+                                   description_, left_.size(), right_.size()));
+    }
+    // Read the first pair now, so that a bad file fails when the source is opened.
+    first_ = Load(0);
+  }
+
+  std::optional<StereoFrame> Read() override {
+    const size_t n = left_.size();
+    if (next_ >= n && !repeat_ && !loop_) return std::nullopt;
+    const size_t i = repeat_ ? 0 : next_ % n;
+    StereoFrame frame = i == 0 && first_ ? *first_ : *Load(i);
+    if (repeat_) {  // one pair for ever: hand out copies so that callers may draw on them
+      frame.left = frame.left.clone();
+      frame.right = frame.right.clone();
+    }
+    frame.index = static_cast<int64_t>(next_++);
+    frame.timestamp_s = SecondsSince(start_);
+    return frame;
+  }
+
+  std::string Describe() const override { return description_; }
+
+ private:
+  std::optional<StereoFrame> Load(size_t i) const {
+    StereoFrame frame;
+    frame.left = ReadImage(left_[i], ImageColor::kColor);
+    frame.right = ReadImage(right_[i], ImageColor::kColor);
+    CheckSameSize(frame.left, left_[i], frame.right, right_[i]);
+    frame.left = detail::ToBgr8(frame.left, left_[i].string());
+    frame.right = detail::ToBgr8(frame.right, right_[i].string());
+    return frame;
+  }
+
+  std::vector<std::filesystem::path> left_, right_;
+  bool repeat_, loop_;
+  std::string description_;
+  std::optional<StereoFrame> first_;
+  size_t next_ = 0;
+  Clock::time_point start_ = Clock::now();
+};
+
+// ---------------------------------------------------------------------------------------------
+// Video files and cameras through cv::VideoCapture.
+// ---------------------------------------------------------------------------------------------
+
+// OpenCV's backends print their own failures on stderr while probing a file; our error says it
+// once, so they are silenced while a capture opens.
+class QuietOpenCvLog {
+ public:
+  QuietOpenCvLog()
+      : previous_(cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT)) {}
+  ~QuietOpenCvLog() { cv::utils::logging::setLogLevel(previous_); }
+
+ private:
+  cv::utils::logging::LogLevel previous_;
+};
+
+cv::VideoCapture OpenCapture(const std::string& name, bool is_device, const FrameSourceOptions& o,
+                             const std::string& spec) {
+  const QuietOpenCvLog quiet;
+  cv::VideoCapture capture;
+  if (is_device) {
+    // "/dev/video3" or "3"
+    std::string digits = name;
+    if (digits.rfind("/dev/video", 0) == 0) digits = digits.substr(10);
+    const bool numeric = !digits.empty() && std::all_of(digits.begin(), digits.end(), [](char c) {
+      return c >= '0' && c <= '9';
+    });
+    if (!numeric) {
+      throw UsageError(
+          fmt::format("source '{}': V4L2 device '{}' must be /dev/videoN or N", spec, name));
+    }
+    if (!std::filesystem::exists("/dev/video" + digits)) {
+      throw InputError(fmt::format("source '{}': no such camera /dev/video{}", spec, digits));
+    }
+    capture.open(std::stoi(digits), cv::CAP_V4L2);
+    if (capture.isOpened()) {
+      if (o.width > 0) capture.set(cv::CAP_PROP_FRAME_WIDTH, o.width);
+      if (o.height > 0) capture.set(cv::CAP_PROP_FRAME_HEIGHT, o.height);
+      if (o.fps > 0) capture.set(cv::CAP_PROP_FPS, o.fps);
+    }
+  } else {
+    if (name.find("://") == std::string::npos && name.find('!') == std::string::npos &&
+        !std::filesystem::exists(name)) {
+      throw InputError(fmt::format("source '{}': video file '{}' does not exist", spec, name));
+    }
+    capture.open(name, cv::CAP_ANY);
+  }
+  if (!capture.isOpened()) {
+    throw InputError(fmt::format("source '{}': OpenCV could not open {} '{}'", spec,
+                                 is_device ? "camera" : "video", name));
+  }
+  return capture;
+}
+
+class CaptureSource final : public FrameSource {
+ public:
+  // One capture with side-by-side frames (right empty) or two captures.
+  CaptureSource(std::vector<std::string> names, bool devices, const FrameSourceOptions& options,
+                const std::string& spec)
+      : names_(std::move(names)), devices_(devices), loop_(options.loop && !devices), spec_(spec) {
+    for (const std::string& name : names_) {
+      captures_.push_back(OpenCapture(name, devices_, options, spec));
+    }
+    // Grab the first frame now: a file that opens but holds no decodable frame fails here.
+    first_ = Grab();
+    if (!first_) {
+      throw InputError(fmt::format("source '{}': no frame could be read", spec_));
+    }
+  }
+
+  std::optional<StereoFrame> Read() override {
+    std::optional<StereoFrame> frame;
+    if (first_) {
+      frame = std::move(first_);
+      first_.reset();
+    } else {
+      frame = Grab();
+      if (!frame && loop_ && next_ > 0) {
+        for (cv::VideoCapture& c : captures_) c.set(cv::CAP_PROP_POS_FRAMES, 0);
+        frame = Grab();
+      }
+    }
+    if (!frame) {
+      if (devices_) {
+        throw InputError(fmt::format("source '{}': the camera stopped delivering frames", spec_));
+      }
+      return std::nullopt;
+    }
+    frame->index = next_++;
+    frame->timestamp_s = SecondsSince(start_);
+    return frame;
+  }
+
+  std::string Describe() const override {
+    const std::string kind = devices_ ? "v4l2" : "video";
+    if (names_.size() == 1) {
+      return fmt::format("{} {} (side by side, {}x{} per camera)", kind, names_[0], size_.width,
+                         size_.height);
+    }
+    return fmt::format("{} {} + {} ({}x{})", kind, names_[0], names_[1], size_.width, size_.height);
+  }
+
+  bool IsLive() const override { return devices_; }
+
+ private:
+  std::optional<StereoFrame> Grab() {
+    // grab() both first, then retrieve(): the two cameras' exposures are as close in time as
+    // V4L2 allows without a hardware trigger.
+    for (cv::VideoCapture& c : captures_) {
+      if (!c.grab()) return std::nullopt;
+    }
+    std::vector<cv::Mat> images(captures_.size());
+    for (size_t i = 0; i < captures_.size(); ++i) {
+      if (!captures_[i].retrieve(images[i]) || images[i].empty()) return std::nullopt;
+    }
+    StereoFrame frame;
+    if (images.size() == 1) {
+      detail::SplitSideBySide(detail::ToBgr8(images[0], spec_), spec_, &frame.left, &frame.right);
+    } else {
+      frame.left = detail::ToBgr8(images[0], spec_);
+      frame.right = detail::ToBgr8(images[1], spec_);
+      CheckPairSizes(frame.left, frame.right, fmt::format("source '{}'", spec_));
+    }
+    size_ = frame.left.size();
+    return frame;
+  }
+
+  std::vector<std::string> names_;
+  bool devices_;
+  bool loop_;
+  std::string spec_;
+  std::vector<cv::VideoCapture> captures_;
+  std::optional<StereoFrame> first_;
+  cv::Size size_;
+  int64_t next_ = 0;
+  Clock::time_point start_ = Clock::now();
+};
+
+// A side-by-side still image: delivered again for every frame.
+class SideBySideImageSource final : public FrameSource {
+ public:
+  SideBySideImageSource(const std::string& path, const std::string& spec) : path_(path) {
+    const cv::Mat image = detail::ToBgr8(ReadImage(path, ImageColor::kColor), path);
+    detail::SplitSideBySide(image, fmt::format("source '{}'", spec), &left_, &right_);
+  }
+  std::optional<StereoFrame> Read() override {
+    StereoFrame frame{left_.clone(), right_.clone(), next_++, SecondsSince(start_)};
+    return frame;
+  }
+  std::string Describe() const override {
+    return fmt::format("side-by-side image {} ({}x{} per camera)", path_, left_.cols, left_.rows);
+  }
+
+ private:
+  std::string path_;
+  cv::Mat left_, right_;
+  int64_t next_ = 0;
+  Clock::time_point start_ = Clock::now();
+};
+
+// ---------------------------------------------------------------------------------------------
+// The synthetic power-line scene.
+// ---------------------------------------------------------------------------------------------
+
+class SyntheticSource final : public FrameSource {
+ public:
+  SyntheticSource(uint64_t seed, const FrameSourceOptions& options)
+      : seed_(seed),
+        renderer_(MakeOptions(seed, options)),
+        calibration_(renderer_.Capture(renderer_.DefaultNoiseSeed()).calibration) {}
+
+  std::optional<StereoFrame> Read() override {
+    // Fresh sensor noise per frame, deterministic in (seed, frame index).
+    const sim::PowerLineScene scene = renderer_.Capture(renderer_.DefaultNoiseSeed() + next_);
+    StereoFrame frame{scene.left, scene.right, next_++, SecondsSince(start_)};
+    return frame;
+  }
+  std::string Describe() const override {
+    return fmt::format("synthetic power-line scene (seed {})", seed_);
+  }
+  std::optional<StereoCalibration> Calibration() const override { return calibration_; }
+
+ private:
+  static sim::PowerLineSceneOptions MakeOptions(uint64_t seed, const FrameSourceOptions& o) {
+    sim::PowerLineSceneOptions scene;
+    scene.seed = seed;
+    scene.sensor.supersampling = o.synthetic_supersampling;
+    if (!o.synthetic_obstacles.empty()) {
+      scene.obstacles = sim::ParseObstacleSpecs(o.synthetic_obstacles);
+    }
+    return scene;
+  }
+
+  uint64_t seed_;
+  sim::PowerLineSceneRenderer renderer_;
+  StereoCalibration calibration_;
+  int64_t next_ = 0;
+  Clock::time_point start_ = Clock::now();
+};
+
+bool IsVideoFile(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  static const std::vector<std::string> kImage = {".png",  ".jpg", ".jpeg", ".bmp", ".tif",
+                                                  ".tiff", ".pgm", ".ppm",  ".pnm", ".webp"};
+  return std::find(kImage.begin(), kImage.end(), ext) == kImage.end();
+}
+
+}  // namespace
+
+void FrameSourceOptions::Check() const {
+  CheckOption(width >= 0, "FrameSourceOptions.width", width, "must be >= 0 (0 = device default)");
+  CheckOption(height >= 0, "FrameSourceOptions.height", height,
+              "must be >= 0 (0 = device default)");
+  CheckOption(fps >= 0, "FrameSourceOptions.fps", fps, "must be >= 0 (0 = device default)");
+  CheckOption(synthetic_supersampling >= 1 && synthetic_supersampling <= 8,
+              "FrameSourceOptions.synthetic_supersampling", synthetic_supersampling,
+              "must be in 1..8");
+}
+
+std::vector<std::string> FrameSourceSchemes() {
+  return {"synthetic[:SEED]", "pair:LEFT,RIGHT", "images:LEFT_GLOB,RIGHT_GLOB",
+          "video:LEFT,RIGHT", "sbs:FILE",        "v4l2:DEVICE[,DEVICE]"};
+}
+
+std::unique_ptr<FrameSource> OpenFrameSource(const std::string& spec,
+                                             const FrameSourceOptions& options) {
+  options.Check();
+  const size_t colon = spec.find(':');
+  const std::string scheme = spec.substr(0, colon);
+  const std::string body = colon == std::string::npos ? "" : spec.substr(colon + 1);
+  if (scheme == "synthetic") {
+    uint64_t seed = 1;
+    if (!body.empty()) {
+      size_t used = 0;
+      try {
+        seed = std::stoull(body, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != body.size()) {
+        throw UsageError(
+            fmt::format("source '{}': the seed '{}' must be a non-negative integer", spec, body));
+      }
+    }
+    return std::make_unique<SyntheticSource>(seed, options);
+  }
+  if (colon == std::string::npos) {
+    throw UsageError(fmt::format("source '{}': expected SCHEME:..., one of {}", spec,
+                                 fmt::join(FrameSourceSchemes(), ", ")));
+  }
+  if (scheme == "pair") {
+    const auto parts = SplitParts(spec, body, 2);
+    return std::make_unique<ImageSequenceSource>(
+        std::vector<std::filesystem::path>{parts[0]}, std::vector<std::filesystem::path>{parts[1]},
+        /*repeat=*/true, /*loop=*/false, fmt::format("image pair {} + {}", parts[0], parts[1]));
+  }
+  if (scheme == "images") {
+    const auto parts = SplitParts(spec, body, 2);
+    auto left = SortedGlob(parts[0]);
+    auto right = SortedGlob(parts[1]);
+    for (int i = 0; i < 2; ++i) {
+      if ((i == 0 ? left : right).empty()) {
+        throw InputError(fmt::format("source '{}': '{}' matches no file", spec, parts[i]));
+      }
+    }
+    const std::string description =
+        fmt::format("image sequence {} + {} ({} pairs)", parts[0], parts[1], left.size());
+    return std::make_unique<ImageSequenceSource>(std::move(left), std::move(right),
+                                                 /*repeat=*/false, options.loop, description);
+  }
+  if (scheme == "video") {
+    return std::make_unique<CaptureSource>(SplitParts(spec, body, 2), /*devices=*/false, options,
+                                           spec);
+  }
+  if (scheme == "sbs") {
+    const auto parts = SplitParts(spec, body, 1);
+    if (!IsVideoFile(parts[0])) return std::make_unique<SideBySideImageSource>(parts[0], spec);
+    return std::make_unique<CaptureSource>(parts, /*devices=*/false, options, spec);
+  }
+  if (scheme == "v4l2") {
+    return std::make_unique<CaptureSource>(SplitParts(spec, body, 0), /*devices=*/true, options,
+                                           spec);
+  }
+  throw UsageError(fmt::format("source '{}': unknown scheme '{}', expected one of {}", spec, scheme,
+                               fmt::join(FrameSourceSchemes(), ", ")));
+}
+
+namespace detail {
+
+void SplitSideBySide(const cv::Mat& frame, const std::string& what, cv::Mat* left, cv::Mat* right) {
+  if (frame.empty()) throw InputError(fmt::format("{}: empty side-by-side frame", what));
+  if (frame.cols % 2 != 0) {
+    throw InputError(fmt::format(
+        "{}: a side-by-side frame must have an even width (left half | right half), got {}x{}",
+        what, frame.cols, frame.rows));
+  }
+  const int half = frame.cols / 2;
+  *left = frame.colRange(0, half).clone();
+  *right = frame.colRange(half, frame.cols).clone();
+}
+
+cv::Mat ToBgr8(const cv::Mat& image, const std::string& what) {
+  if (image.empty()) throw InputError(fmt::format("{}: empty image", what));
+  if (image.depth() != CV_8U) {
+    throw InputError(
+        fmt::format("{}: expected 8-bit images, got OpenCV depth {}", what, image.depth()));
+  }
+  cv::Mat bgr;
+  switch (image.channels()) {
+    case 1:
+      cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+      return bgr;
+    case 3:
+      return image;
+    case 4:
+      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+      return bgr;
+    default:
+      throw InputError(
+          fmt::format("{}: expected 1, 3 or 4 channels, got {}", what, image.channels()));
+  }
+}
+
+}  // namespace detail
+}  // namespace linesight

@@ -1,0 +1,66 @@
+#include "linesight/server/api_request.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+RoiRequest ParseRoiRequest(const std::string& body, cv::Size image) {
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(body);
+  } catch (const nlohmann::json::exception&) {
+    throw InputError("the request body is not valid JSON");
+  }
+  if (!j.is_object()) throw InputError("expected a JSON object {\"rois\": [...], \"auto\": bool}");
+  RoiRequest request;
+  for (const auto& [key, value] : j.items()) {
+    if (key != "rois" && key != "auto") {
+      throw InputError(fmt::format("unknown field '{}' (expected 'rois' and/or 'auto')", key));
+    }
+  }
+  if (j.contains("auto")) {
+    if (!j["auto"].is_boolean()) throw InputError("'auto' must be true or false");
+    request.auto_detect = j["auto"].get<bool>();
+  }
+  if (j.contains("rois")) {
+    const nlohmann::json& rois = j["rois"];
+    if (!rois.is_array()) throw InputError("'rois' must be an array of [x, y, w, h]");
+    constexpr size_t kMaxRois = 32;
+    if (rois.size() > kMaxRois) {
+      throw InputError(fmt::format("at most {} ROIs, got {}", kMaxRois, rois.size()));
+    }
+    std::vector<cv::Rect> out;
+    for (size_t i = 0; i < rois.size(); ++i) {
+      const nlohmann::json& r = rois[i];
+      const bool shape_ok = r.is_array() && r.size() == 4 &&
+                            std::all_of(r.begin(), r.end(), [](const nlohmann::json& v) {
+                              constexpr int64_t kLimit = 1'000'000;  // far beyond any image
+                              if (v.is_number_unsigned()) return v.get<uint64_t>() <= kLimit;
+                              return v.is_number_integer() && v.get<int64_t>() >= -kLimit &&
+                                     v.get<int64_t>() <= kLimit;
+                            });
+      if (!shape_ok) {
+        throw InputError(fmt::format("rois[{}]: expected [x, y, w, h] of integers", i));
+      }
+      const cv::Rect rect(r[0].get<int>(), r[1].get<int>(), r[2].get<int>(), r[3].get<int>());
+      if (rect.width <= 0 || rect.height <= 0 || rect.x < 0 || rect.y < 0 ||
+          rect.x + rect.width > image.width || rect.y + rect.height > image.height) {
+        throw InputError(fmt::format("rois[{}] = {},{},{},{} is not inside the {}x{} image", i,
+                                     rect.x, rect.y, rect.width, rect.height, image.width,
+                                     image.height));
+      }
+      out.push_back(rect);
+    }
+    request.rois = std::move(out);
+  }
+  return request;
+}
+
+}  // namespace linesight

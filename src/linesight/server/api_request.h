@@ -1,0 +1,22 @@
+// Requests of the base station's JSON API (base_station.h), parsed from untrusted HTTP bodies.
+// Fuzzed: api_request_fuzz.cc (libFuzzer) and a seeded mutation test in base_station_test.cc.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace linesight {
+
+// What the API's POST /api/rois carries. ParseRoiRequest throws InputError with a message fit for
+// the HTTP answer ("rois[1]: expected [x, y, w, h] of integers") for anything but a JSON object
+// with an optional "rois" array of 4-integer arrays inside `image` and an optional boolean "auto".
+struct RoiRequest {
+  std::optional<std::vector<cv::Rect>> rois;
+  std::optional<bool> auto_detect;
+};
+RoiRequest ParseRoiRequest(const std::string& body, cv::Size image);
+
+}  // namespace linesight

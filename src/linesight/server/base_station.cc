@@ -1,0 +1,389 @@
+#include "linesight/server/base_station.h"
+
+#include <httplib.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "linesight/core/error.h"
+#include "linesight/core/timer.h"
+#include "linesight/io/disparity_io.h"
+#include "linesight/server/web_page.h"
+
+namespace linesight {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+std::vector<uint8_t> EncodeJpeg(const cv::Mat& image, int quality) {
+  std::vector<uint8_t> bytes;
+  cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+  return bytes;
+}
+
+nlohmann::json RectToJson(const cv::Rect& r) { return {r.x, r.y, r.width, r.height}; }
+
+}  // namespace
+
+void BaseStationOptions::Check() const {
+  pipeline.Check();
+  tracker.Check();
+  CheckOption(jpeg_quality >= 1 && jpeg_quality <= 100, "BaseStationOptions.jpeg_quality",
+              jpeg_quality, "must be in 1..100");
+  CheckOption(max_auto_relative_sigma > 0, "BaseStationOptions.max_auto_relative_sigma",
+              max_auto_relative_sigma, "must be > 0");
+  CheckOption(max_fps >= 0, "BaseStationOptions.max_fps", max_fps, "must be >= 0 (0 = no cap)");
+  CheckOption(max_frames >= 0, "BaseStationOptions.max_frames", max_frames,
+              "must be >= 0 (0 = until the source ends)");
+}
+
+BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
+                         std::optional<StereoCalibration> calibration,
+                         const BaseStationOptions& options)
+    : source_(std::move(source)),
+      options_(options),
+      rois_(options.rois),
+      auto_detect_(options.auto_detect),
+      tracker_(options.tracker) {
+  options_.Check();
+  if (!calibration) calibration = source_->Calibration();
+  if (!calibration) {
+    throw InputError(fmt::format("source '{}' has no calibration of its own: give --calib",
+                                 source_->Describe()));
+  }
+  // The first frame tells the image size; it is processed first.
+  first_frame_ = source_->Read();
+  if (!first_frame_) {
+    throw InputError(fmt::format("source '{}' delivered no frame", source_->Describe()));
+  }
+  image_size_ = first_frame_->left.size();
+  CheckCalibrationMatchesImage(*calibration, image_size_, "the calibration");
+  for (const cv::Rect& roi : rois_) CheckRoi(roi, image_size_);
+  pipeline_ = std::make_unique<RangingPipeline>(*calibration, options_.pipeline);
+  calibration_summary_ =
+      fmt::format("{}x{}, rectified f {:.1f} px, baseline {:.1f} mm", image_size_.width,
+                  image_size_.height, pipeline_->rectified_calibration().RectifiedFocal(),
+                  1000 * pipeline_->rectified_calibration().Baseline());
+}
+
+BaseStation::~BaseStation() { Stop(); }
+
+void BaseStation::Start() {
+  if (running_.exchange(true)) return;
+  stop_ = false;
+  thread_ = std::thread([this] { Loop(); });
+}
+
+void BaseStation::Stop() {
+  stop_ = true;
+  published_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  running_ = false;
+}
+
+void BaseStation::Loop() {
+  try {
+    while (!stop_) {
+      {
+        std::unique_lock lock(mutex_);
+        if (paused_) {
+          published_.wait_for(lock, std::chrono::milliseconds(100));
+          continue;
+        }
+      }
+      const auto started = Clock::now();
+      if (!Step()) break;
+      if (options_.max_frames > 0 && Snapshot().frame_index + 1 >= options_.max_frames) break;
+      if (options_.max_fps > 0) {
+        std::this_thread::sleep_until(started +
+                                      std::chrono::duration<double>(1.0 / options_.max_fps));
+      }
+    }
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex_);
+    error_ = e.what();
+  }
+  running_ = false;
+  published_.notify_all();
+}
+
+bool BaseStation::Step() {
+  std::optional<StereoFrame> frame;
+  if (first_frame_) {
+    frame = std::move(first_frame_);
+    first_frame_.reset();
+  } else {
+    frame = source_->Read();
+  }
+  if (!frame) return false;
+  if (frame->left.size() != image_size_) {
+    throw InputError(fmt::format("source '{}': frame {} is {}x{}, the stream started at {}x{}",
+                                 source_->Describe(), frame->index, frame->left.cols,
+                                 frame->left.rows, image_size_.width, image_size_.height));
+  }
+  std::vector<cv::Rect> rois;
+  bool automatic = false;
+  {
+    std::lock_guard lock(mutex_);
+    rois = rois_;
+    automatic = auto_detect_;
+    if (settings_changed_) {
+      tracker_.Reset();
+      settings_changed_ = false;
+    }
+  }
+
+  Stopwatch watch;
+  const RangingFrame ranged = pipeline_->Process(frame->left, frame->right);
+  std::vector<RangeResult> results = pipeline_->RangeRois(ranged, rois);
+  const size_t num_roi = results.size();
+  if (automatic) {
+    for (RangeResult& r : pipeline_->RangeAuto(ranged)) results.push_back(std::move(r));
+  }
+  const double process_ms = watch.ElapsedMs();
+
+  std::vector<DistanceMeasurement> measurements;
+  nlohmann::json measured = nlohmann::json::array();
+  for (size_t i = 0; i < results.size(); ++i) {
+    const RangeResult& r = results[i];
+    nlohmann::json j = RangeResultToJson(r);
+    j["source"] = i < num_roi ? "roi" : "auto";
+    if (i < num_roi) j["roi_index"] = i;
+    measured.push_back(j);
+    const bool roi = i < num_roi;
+    const bool trackable = r.ok() && r.sigma_m > 0 &&
+                           (roi || r.sigma_m <= options_.max_auto_relative_sigma * r.distance_m);
+    j["tracked"] = trackable;
+    if (trackable) {
+      measurements.push_back(
+          {i < num_roi ? fmt::format("roi:{}", i) : std::string(), r.box, r.distance_m, r.sigma_m});
+    }
+  }
+
+  // Colour map of the working range only (farther = black), scaled to what is in view.
+  const DisparityRange range = pipeline_->disparity_range();
+  cv::Mat in_range = ranged.disparity.clone();
+  in_range.setTo(std::numeric_limits<float>::infinity(),
+                 (in_range < range.min_disparity) | (in_range > range.max_disparity()));
+  const cv::Mat colour = ColorizeDisparity(in_range);
+  std::vector<uint8_t> left_jpeg = EncodeJpeg(ranged.left_rectified, options_.jpeg_quality);
+  std::vector<uint8_t> disparity_jpeg = EncodeJpeg(colour, options_.jpeg_quality);
+
+  std::lock_guard lock(mutex_);
+  const std::vector<TrackState> tracks = tracker_.Update(frame->timestamp_s, measurements);
+  nlohmann::json tracked = nlohmann::json::array();
+  int tentative = 0;
+  for (const TrackState& t : tracks) {
+    if (t.confirmed) {
+      tracked.push_back(t.ToJson());
+    } else {
+      ++tentative;
+    }
+  }
+  if (last_publish_s_ >= 0 && frame->timestamp_s > last_publish_s_) {
+    const double instant = 1.0 / (frame->timestamp_s - last_publish_s_);
+    fps_ = fps_ > 0 ? 0.8 * fps_ + 0.2 * instant : instant;
+  }
+  last_publish_s_ = frame->timestamp_s;
+  snapshot_.frame_index = frame->index;
+  snapshot_.timestamp_s = frame->timestamp_s;
+  snapshot_.process_ms = process_ms;
+  snapshot_.fps = fps_;
+  snapshot_.left_jpeg = std::move(left_jpeg);
+  snapshot_.disparity_jpeg = std::move(disparity_jpeg);
+  snapshot_.result = {{"frame", frame->index},
+                      {"timestamp_s", frame->timestamp_s},
+                      {"process_ms", process_ms},
+                      {"measurements", measured},
+                      {"tracks", tracked},
+                      {"tentative_tracks", tentative},
+                      {"distance_definition",
+                       "depth of the obstacle's nearest visible surface along the rectified left "
+                       "optical axis (m)"}};
+  published_.notify_all();
+  return true;
+}
+
+int64_t BaseStation::WaitForFrame(int64_t after, double timeout_s) const {
+  std::unique_lock lock(mutex_);
+  published_.wait_for(lock, std::chrono::duration<double>(timeout_s),
+                      [&] { return snapshot_.frame_index > after || !running_.load(); });
+  return snapshot_.frame_index;
+}
+
+BaseStationSnapshot BaseStation::Snapshot() const {
+  std::lock_guard lock(mutex_);
+  return snapshot_;
+}
+
+nlohmann::json BaseStation::Status() const {
+  std::lock_guard lock(mutex_);
+  nlohmann::json rois = nlohmann::json::array();
+  for (const cv::Rect& r : rois_) rois.push_back(RectToJson(r));
+  const DisparityRange range = pipeline_->disparity_range();
+  const DisparityRange searched = pipeline_->search_range();
+  return {{"source", source_->Describe()},
+          {"live", source_->IsLive()},
+          {"calibration", calibration_summary_},
+          {"image_size", {image_size_.width, image_size_.height}},
+          {"method", pipeline_->method()},
+          {"working_range_m", {options_.pipeline.min_depth_m, options_.pipeline.max_depth_m}},
+          {"disparity_range", {range.min_disparity, range.max_disparity()}},
+          {"searched_disparities", {searched.min_disparity, searched.max_disparity()}},
+          {"frame", snapshot_.frame_index},
+          {"fps", snapshot_.fps},
+          {"process_ms", snapshot_.process_ms},
+          {"running", running_.load()},
+          {"paused", paused_},
+          {"error", error_},
+          {"rois", rois},
+          {"auto", auto_detect_}};
+}
+
+void BaseStation::SetRois(const RoiRequest& request) {
+  std::lock_guard lock(mutex_);
+  if (request.rois) rois_ = *request.rois;
+  if (request.auto_detect) auto_detect_ = *request.auto_detect;
+  settings_changed_ = true;
+}
+
+void BaseStation::SetPaused(bool paused) {
+  std::lock_guard lock(mutex_);
+  paused_ = paused;
+  published_.notify_all();
+}
+
+std::string BaseStation::error() const {
+  std::lock_guard lock(mutex_);
+  return error_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// HTTP
+// ---------------------------------------------------------------------------------------------
+
+struct BaseStationServer::Impl {
+  BaseStation* station;
+  httplib::Server http;
+};
+
+namespace {
+
+void SendJson(httplib::Response& res, const nlohmann::json& j, int status = 200) {
+  res.status = status;
+  res.set_header("Cache-Control", "no-store");
+  res.set_content(j.dump(), "application/json");
+}
+
+void SendError(httplib::Response& res, int status, const std::string& message) {
+  SendJson(res, {{"error", message}}, status);
+}
+
+void SendJpeg(httplib::Response& res, const std::vector<uint8_t>& bytes) {
+  if (bytes.empty()) {
+    SendError(res, 503, "no frame has been processed yet");
+    return;
+  }
+  res.set_header("Cache-Control", "no-store");
+  res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), "image/jpeg");
+}
+
+}  // namespace
+
+BaseStationServer::BaseStationServer(BaseStation* station) : impl_(std::make_unique<Impl>()) {
+  impl_->station = station;
+  httplib::Server& http = impl_->http;
+  http.set_payload_max_length(64 * 1024);  // the API takes small JSON bodies only
+  http.Get("/", [](const httplib::Request&, httplib::Response& res) {
+    res.set_content(BaseStationPage(), "text/html; charset=utf-8");
+  });
+  http.Get("/api/status", [station](const httplib::Request&, httplib::Response& res) {
+    SendJson(res, station->Status());
+  });
+  http.Get("/api/result", [station](const httplib::Request& req, httplib::Response& res) {
+    // ?after=N waits (up to 2 s) for a frame newer than N: clients poll without busy loops.
+    if (req.has_param("after")) {
+      const std::string text = req.get_param_value("after");
+      int64_t after = 0;
+      try {
+        size_t used = 0;
+        after = std::stoll(text, &used);
+        if (used != text.size()) throw std::invalid_argument(text);
+      } catch (const std::exception&) {
+        SendError(res, 400, fmt::format("'after' must be an integer frame index, got '{}'", text));
+        return;
+      }
+      station->WaitForFrame(after, 2.0);
+    }
+    const BaseStationSnapshot snap = station->Snapshot();
+    if (snap.frame_index < 0) {
+      SendError(res, 503, "no frame has been processed yet");
+      return;
+    }
+    SendJson(res, snap.result);
+  });
+  http.Get("/api/frame/left.jpg", [station](const httplib::Request&, httplib::Response& res) {
+    SendJpeg(res, station->Snapshot().left_jpeg);
+  });
+  http.Get("/api/frame/disparity.jpg", [station](const httplib::Request&, httplib::Response& res) {
+    SendJpeg(res, station->Snapshot().disparity_jpeg);
+  });
+  http.Post("/api/rois", [station](const httplib::Request& req, httplib::Response& res) {
+    try {
+      station->SetRois(ParseRoiRequest(req.body, station->image_size()));
+    } catch (const InputError& e) {
+      SendError(res, 400, e.what());
+      return;
+    }
+    SendJson(res, station->Status());
+  });
+  http.Post("/api/pause", [station](const httplib::Request&, httplib::Response& res) {
+    station->SetPaused(true);
+    SendJson(res, station->Status());
+  });
+  http.Post("/api/resume", [station](const httplib::Request&, httplib::Response& res) {
+    station->SetPaused(false);
+    SendJson(res, station->Status());
+  });
+  http.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+    if (res.status == 404) {
+      SendError(res, 404, fmt::format("no such resource: {} {}", req.method, req.path));
+    }
+  });
+}
+
+BaseStationServer::~BaseStationServer() { Stop(); }
+
+int BaseStationServer::Bind(const std::string& host, int port) {
+  if (port < 0 || port > 65535) {
+    throw InputError(fmt::format("port {} is not in 0..65535", port));
+  }
+  if (port == 0) {
+    const int bound = impl_->http.bind_to_any_port(host);
+    if (bound < 0) throw InputError(fmt::format("cannot listen on {} (any port)", host));
+    return bound;
+  }
+  if (!impl_->http.bind_to_port(host, port)) {
+    throw InputError(
+        fmt::format("cannot listen on {}:{} (in use, or not an address of this host)", host, port));
+  }
+  return port;
+}
+
+void BaseStationServer::Listen() { impl_->http.listen_after_bind(); }
+
+void BaseStationServer::Stop() {
+  if (impl_) impl_->http.stop();
+}
+
+const std::string& BaseStationPage() {
+  static const std::string page(kBaseStationPage);
+  return page;
+}
+
+}  // namespace linesight

@@ -1,0 +1,144 @@
+// The base station: a live ranging loop over a FrameSource and the HTTP server that shows it
+// (`linesight serve`). The loop grabs a pair, rectifies, matches, ranges the user's ROIs and/or the
+// automatically found obstacles, filters every obstacle's distance over time (DistanceTracker) and
+// publishes the newest result; the server hands it to the web page (web/index.html, embedded) and
+// to any client through a JSON API:
+//
+//   GET  /                    the base-station page
+//   GET  /api/status          source, calibration summary, frame index, fps, latency, settings
+//   GET  /api/result          newest frame's obstacles (per-frame measurements and filtered tracks)
+//   GET  /api/frame/left.jpg  newest rectified left image (JPEG)
+//   GET  /api/frame/disparity.jpg  its disparity, colour-mapped (JPEG)
+//   POST /api/rois            {"rois": [[x, y, w, h], ...], "auto": true|false}: set what is ranged
+//   POST /api/pause, /api/resume
+//
+// Every API error answers 4xx with {"error": "<what is wrong>"}. The HTTP layer only parses and
+// presents; all work is in the library.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "linesight/acquire/frame_source.h"
+#include "linesight/ranging/pipeline.h"
+#include "linesight/server/api_request.h"
+#include "linesight/server/distance_tracker.h"
+
+namespace linesight {
+
+struct BaseStationOptions {
+  RangingPipelineOptions pipeline;
+  DistanceTrackerOptions tracker;
+  std::vector<cv::Rect> rois;  // user ROIs (rectified left pixels)
+  bool auto_detect = true;     // also find obstacles automatically
+  // Automatic detections whose sigma_m exceeds this share of their distance are reported but not
+  // tracked: fragments of background structure whose depth the ranging cannot pin down (> 0).
+  double max_auto_relative_sigma = 0.05;
+  int jpeg_quality = 85;   // 1..100
+  double max_fps = 0;      // processing rate cap (0 = as fast as possible)
+  int64_t max_frames = 0;  // stop after this many frames (0 = until the source ends)
+
+  void Check() const;
+};
+
+// The newest published result.
+struct BaseStationSnapshot {
+  int64_t frame_index = -1;  // -1 until the first frame is processed
+  double timestamp_s = 0;
+  double process_ms = 0;  // rectify + match + range of this frame
+  double fps = 0;         // processed frames per second (moving average)
+  std::vector<uint8_t> left_jpeg, disparity_jpeg;
+  nlohmann::json result;  // measurements and tracks of this frame
+};
+
+class BaseStation {
+ public:
+  // Throws InputError when the source gives no calibration and `calibration` is empty, or the
+  // calibration does not match the source's image size.
+  BaseStation(std::unique_ptr<FrameSource> source, std::optional<StereoCalibration> calibration,
+              const BaseStationOptions& options);
+  ~BaseStation();
+  BaseStation(const BaseStation&) = delete;
+  BaseStation& operator=(const BaseStation&) = delete;
+
+  // Starts the processing thread.
+  void Start();
+  // Stops it and waits (idempotent).
+  void Stop();
+  // Processes one frame on the calling thread (what the thread does in a loop). Returns false
+  // when the source has ended.
+  bool Step();
+  // Blocks until a frame newer than `after` is published, the loop ends, or the timeout passes.
+  // Returns the newest frame index.
+  int64_t WaitForFrame(int64_t after, double timeout_s) const;
+
+  BaseStationSnapshot Snapshot() const;
+  nlohmann::json Status() const;
+  void SetRois(const RoiRequest& request);
+  void SetPaused(bool paused);
+  bool running() const { return running_.load(); }
+  // The error that ended the loop (a camera that stopped), empty otherwise.
+  std::string error() const;
+  cv::Size image_size() const { return image_size_; }
+
+ private:
+  void Loop();
+
+  std::unique_ptr<FrameSource> source_;
+  BaseStationOptions options_;
+  std::unique_ptr<RangingPipeline> pipeline_;
+  std::string calibration_summary_;
+  cv::Size image_size_;
+  std::optional<StereoFrame> first_frame_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  mutable std::condition_variable published_;
+  BaseStationSnapshot snapshot_;
+  std::vector<cv::Rect> rois_;
+  bool auto_detect_ = true;
+  bool settings_changed_ = false;
+  bool paused_ = false;
+  std::string error_;
+  DistanceTracker tracker_;
+  double fps_ = 0;
+  double last_publish_s_ = -1;
+
+  std::atomic<bool> running_{false};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// The HTTP front end of a BaseStation.
+class BaseStationServer {
+ public:
+  explicit BaseStationServer(BaseStation* station);
+  ~BaseStationServer();
+  BaseStationServer(const BaseStationServer&) = delete;
+  BaseStationServer& operator=(const BaseStationServer&) = delete;
+
+  // Binds to host:port (port 0 = any free port) and returns the port; throws InputError when the
+  // address cannot be bound.
+  int Bind(const std::string& host, int port);
+  // Serves until Stop() (blocking).
+  void Listen();
+  void Stop();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The embedded web page (web/index.html).
+const std::string& BaseStationPage();
+
+}  // namespace linesight
