@@ -179,7 +179,10 @@ bool BaseStation::Step() {
   nlohmann::json tracked = nlohmann::json::array();
   int tentative = 0;
   for (const TrackState& t : tracks) {
-    if (t.confirmed) {
+    // Reported: confirmed tracks measured in this frame, and every ROI track. An automatic track
+    // that missed this frame coasts (for re-association) but is not shown: its predicted sigma
+    // grows with every frame it is not seen.
+    if (t.confirmed && (t.missed == 0 || t.key != "auto")) {
       tracked.push_back(t.ToJson());
     } else {
       ++tentative;
@@ -301,6 +304,9 @@ BaseStationServer::BaseStationServer(BaseStation* station) : impl_(std::make_uni
   http.set_payload_max_length(64 * 1024);  // the API takes small JSON bodies only
   http.Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(BaseStationPage(), "text/html; charset=utf-8");
+  });
+  http.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) {
+    res.status = 204;  // no icon; answered so that browsers do not log a 404
   });
   http.Get("/api/status", [station](const httplib::Request&, httplib::Response& res) {
     SendJson(res, station->Status());

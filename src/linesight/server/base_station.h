@@ -6,7 +6,8 @@
 //
 //   GET  /                    the base-station page
 //   GET  /api/status          source, calibration summary, frame index, fps, latency, settings
-//   GET  /api/result          newest frame's obstacles (per-frame measurements and filtered tracks)
+//   GET  /api/result          newest frame's obstacles: per-frame measurements and the filtered
+//                             tracks (confirmed ones seen in this frame, and every ROI track)
 //   GET  /api/frame/left.jpg  newest rectified left image (JPEG)
 //   GET  /api/frame/disparity.jpg  its disparity, colour-mapped (JPEG)
 //   POST /api/rois            {"rois": [[x, y, w, h], ...], "auto": true|false}: set what is ranged
