@@ -194,6 +194,16 @@ class CaptureSource final : public FrameSource {
     if (!first_) {
       throw InputError(fmt::format("source '{}': no frame could be read", spec_));
     }
+    // Fixed from here on (a frame of another size fails the ranging loop), so Describe() needs no
+    // lock while the loop grabs.
+    const std::string kind = devices_ ? "v4l2" : "video";
+    const cv::Size size = first_->left.size();
+    description_ =
+        names_.size() == 1
+            ? fmt::format("{} {} (side by side, {}x{} per camera)", kind, names_[0], size.width,
+                          size.height)
+            : fmt::format("{} {} + {} ({}x{})", kind, names_[0], names_[1], size.width,
+                          size.height);
   }
 
   std::optional<StereoFrame> Read() override {
@@ -219,14 +229,7 @@ class CaptureSource final : public FrameSource {
     return frame;
   }
 
-  std::string Describe() const override {
-    const std::string kind = devices_ ? "v4l2" : "video";
-    if (names_.size() == 1) {
-      return fmt::format("{} {} (side by side, {}x{} per camera)", kind, names_[0], size_.width,
-                         size_.height);
-    }
-    return fmt::format("{} {} + {} ({}x{})", kind, names_[0], names_[1], size_.width, size_.height);
-  }
+  std::string Describe() const override { return description_; }
 
   bool IsLive() const override { return devices_; }
 
@@ -249,7 +252,6 @@ class CaptureSource final : public FrameSource {
       frame.right = detail::ToBgr8(images[1], spec_);
       CheckPairSizes(frame.left, frame.right, fmt::format("source '{}'", spec_));
     }
-    size_ = frame.left.size();
     return frame;
   }
 
@@ -259,7 +261,7 @@ class CaptureSource final : public FrameSource {
   std::string spec_;
   std::vector<cv::VideoCapture> captures_;
   std::optional<StereoFrame> first_;
-  cv::Size size_;
+  std::string description_;
   int64_t next_ = 0;
   Clock::time_point start_ = Clock::now();
 };
