@@ -11,9 +11,20 @@ namespace linesight {
 
 SgmOptions IsgmDefaultSgmOptions() {
   SgmOptions o;
+  o.census_width = 7;
+  o.census_height = 5;
   o.p1 = 14;
-  o.p2 = 160;
-  o.p2_gradient_alpha = 10;
+  o.p2 = 100;
+  o.p2_gradient_alpha = 4;
+  return o;
+}
+
+PlaneRefinementOptions IsgmDefaultRefinementOptions() {
+  PlaneRefinementOptions o;
+  o.superpixels.region_size = 13;
+  o.superpixels.compactness = 10;
+  o.inlier_threshold = 0.5;
+  o.outlier_threshold = 1.0;
   return o;
 }
 
@@ -71,6 +82,8 @@ IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params
   // given.
   o.sgm = ReadSgmOptions(options, params);
   const SgmOptions tuned = IsgmDefaultSgmOptions();
+  if (!options.params.count("census_width")) o.sgm.census_width = tuned.census_width;
+  if (!options.params.count("census_height")) o.sgm.census_height = tuned.census_height;
   if (!options.params.count("p1")) o.sgm.p1 = tuned.p1;
   if (!options.params.count("p2")) o.sgm.p2 = tuned.p2;
   if (!options.params.count("p2_alpha")) o.sgm.p2_gradient_alpha = tuned.p2_gradient_alpha;
