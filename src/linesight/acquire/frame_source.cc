@@ -198,12 +198,10 @@ class CaptureSource final : public FrameSource {
     // lock while the loop grabs.
     const std::string kind = devices_ ? "v4l2" : "video";
     const cv::Size size = first_->left.size();
-    description_ =
-        names_.size() == 1
-            ? fmt::format("{} {} (side by side, {}x{} per camera)", kind, names_[0], size.width,
-                          size.height)
-            : fmt::format("{} {} + {} ({}x{})", kind, names_[0], names_[1], size.width,
-                          size.height);
+    description_ = names_.size() == 1 ? fmt::format("{} {} (side by side, {}x{} per camera)", kind,
+                                                    names_[0], size.width, size.height)
+                                      : fmt::format("{} {} + {} ({}x{})", kind, names_[0],
+                                                    names_[1], size.width, size.height);
   }
 
   std::optional<StereoFrame> Read() override {

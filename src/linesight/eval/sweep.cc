@@ -13,6 +13,7 @@
 #include "linesight/eval/eval_stereo.h"
 #include "linesight/eval/metrics.h"
 #include "linesight/eval/plot.h"
+#include "linesight/stereo/isgm.h"
 #include "linesight/stereo/matcher.h"
 
 namespace linesight {
@@ -27,6 +28,18 @@ std::vector<std::string> Range(int first, int last, int step) {
 }
 
 const std::vector<std::string> kNumDisparities = Range(16, 112, 16);
+
+// `p` with `centre` (formatted as fmt does: 14, 0.5) as its centre, inserted among the swept
+// values in numeric order when it is not one of them.
+SweepParameter WithCentre(SweepParameter p, double centre) {
+  p.centre = fmt::format("{}", centre);
+  if (std::find(p.values.begin(), p.values.end(), p.centre) == p.values.end()) {
+    const auto at = std::find_if(p.values.begin(), p.values.end(),
+                                 [&](const std::string& v) { return std::stod(v) > centre; });
+    p.values.insert(at, p.centre);
+  }
+  return p;
+}
 
 }  // namespace
 
@@ -44,12 +57,15 @@ std::vector<SweepParameter> DefaultSweepParameters(const std::string& method) {
             {method, "uniqueness", Range(5, 15, 1), "10"}};
   }
   if (method == "isgm") {
-    // Centre = isgm's defaults (p1 14, p2 160, superpixel_size 12, plane_inlier 1.0 px).
-    return {num_disp,
-            {method, "p1", {"4", "8", "14", "20", "28", "40"}, "14"},
-            {method, "p2", {"60", "100", "130", "160", "190", "250"}, "160"},
-            {method, "superpixel_size", {"6", "8", "10", "12", "16", "20", "24"}, "12"},
-            {method, "plane_inlier", {"0.5", "0.75", "1", "1.5", "2"}, "1"}};
+    // Centre = isgm's own defaults, taken from the matcher so that the sweep follows them.
+    const SgmOptions sgm = IsgmDefaultSgmOptions();
+    const PlaneRefinementOptions refine = IsgmDefaultRefinementOptions();
+    return {num_disp, WithCentre({method, "p1", {"4", "8", "14", "20", "28", "40"}, ""}, sgm.p1),
+            WithCentre({method, "p2", {"60", "80", "100", "130", "160", "190", "250"}, ""}, sgm.p2),
+            WithCentre({method, "superpixel_size", {"6", "8", "10", "12", "16", "20", "24"}, ""},
+                       refine.superpixels.region_size),
+            WithCentre({method, "plane_inlier", {"0.25", "0.5", "0.75", "1", "1.5", "2"}, ""},
+                       refine.inlier_threshold)};
   }
   if (method == "sgm") {
     return {num_disp,
