@@ -72,6 +72,10 @@ int RunCalibrate(int argc, char** argv) {
   app.add_option("--recon-distance-weight", options.recon_distance_weight,
                  "recon: weight w_d of the adjacent-distance term")
       ->capture_default_str();
+  app.add_flag(
+         "--recon-board-bend,!--no-recon-board-bend", options.recon_board_bend,
+         "recon: estimate the board's quadratic out-of-plane bend instead of assuming it flat")
+      ->capture_default_str();
   app.add_option("--min-views", options.min_views, "fewest views per camera and pair views (>= 3)")
       ->capture_default_str();
   return RunCommand(app, argc, argv, [&] {
@@ -147,6 +151,10 @@ int RunCalibrate(int argc, char** argv) {
                  "of the square (%.4f mm)\n",
                  report.stereo_rms_px, report.epipolar_mean_abs_dy_px,
                  report.reconstruction_percent, 1000 * report.reconstruction_rmse_m);
+    if (result.board_bend != calib::BoardBend{}) {
+      std::fprintf(out, "board bend (u², v², uv at the grid corners) %.6f, %.6f, %.6f\n",
+                   result.board_bend[0], result.board_bend[1], result.board_bend[2]);
+    }
     std::fprintf(out, "wrote %s\n", out_path.c_str());
   });
 }

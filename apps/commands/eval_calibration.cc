@@ -52,6 +52,9 @@ int RunEvalCalibration(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--recon-distance-weight", options.calibration.recon_distance_weight, "recon: w_d")
       ->capture_default_str();
+  app.add_flag("--recon-board-bend,!--no-recon-board-bend", options.calibration.recon_board_bend,
+               "recon: estimate the board's quadratic bend (the simulated board is flat)")
+      ->capture_default_str();
   app.add_option("--json", json_path, "JSON report (- for stdout)");
   app.add_option("--csv", csv_path, "CSV table");
   app.add_option("--plots", plots_dir, "write calibration_{noise,images}_{rms,mae}.svg here");

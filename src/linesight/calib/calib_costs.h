@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include "linesight/calib/camera_model.h"
+#include "linesight/calib/pattern.h"
 #include "linesight/calib/pose.h"
 
 namespace linesight::calib::detail {
@@ -67,6 +68,82 @@ struct StereoReprojectionResidual {
 
   Eigen::Vector2d observed_;
   Eigen::Vector3d board_point_;
+};
+
+// recon's board-shape model: a board point displaced along the board normal by the shared
+// quadratic bend z = b0·u² + b1·v² + b2·u·v (metres), u, v the point's board coordinates scaled to
+// [−1, 1] over the corner grid (BoardBendCoordinates). No constant or linear terms: those are a
+// rigid motion of the board, already in every view's pose.
+template <typename T>
+void BentBoardPoint(const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv, const T* bend,
+                    T* point) {
+  point[0] = T(board_point.x());
+  point[1] = T(board_point.y());
+  point[2] = T(board_point.z()) + bend[0] * T(uv.x() * uv.x()) + bend[1] * T(uv.y() * uv.y()) +
+             bend[2] * T(uv.x() * uv.y());
+}
+
+// ReprojectionResidual on the bent board.
+struct BentReprojectionResidual {
+  BentReprojectionResidual(const Eigen::Vector2d& observed, const Eigen::Vector3d& board_point,
+                           const Eigen::Vector2d& uv)
+      : observed_(observed), board_point_(board_point), uv_(uv) {}
+
+  template <typename T>
+  bool operator()(const T* intrinsics, const T* camera_from_board, const T* bend,
+                  T* residual) const {
+    T board[3], camera[3], pixel[2];
+    BentBoardPoint(board_point_, uv_, bend, board);
+    TransformPoint(camera_from_board, board, camera);
+    if (!Project(intrinsics, camera, pixel)) return false;
+    residual[0] = pixel[0] - T(observed_.x());
+    residual[1] = pixel[1] - T(observed_.y());
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
+                                     const Eigen::Vector3d& board_point,
+                                     const Eigen::Vector2d& uv) {
+    return new ceres::AutoDiffCostFunction<BentReprojectionResidual, 2, kNumIntrinsics, kPoseSize,
+                                           kBoardBendSize>(
+        new BentReprojectionResidual(observed, board_point, uv));
+  }
+
+  Eigen::Vector2d observed_;
+  Eigen::Vector3d board_point_;
+  Eigen::Vector2d uv_;
+};
+
+// StereoReprojectionResidual on the bent board.
+struct BentStereoReprojectionResidual {
+  BentStereoReprojectionResidual(const Eigen::Vector2d& observed,
+                                 const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv)
+      : observed_(observed), board_point_(board_point), uv_(uv) {}
+
+  template <typename T>
+  bool operator()(const T* intrinsics, const T* left_from_board, const T* right_from_left,
+                  const T* bend, T* residual) const {
+    T board[3], left[3], right[3], pixel[2];
+    BentBoardPoint(board_point_, uv_, bend, board);
+    TransformPoint(left_from_board, board, left);
+    TransformPoint(right_from_left, left, right);
+    if (!Project(intrinsics, right, pixel)) return false;
+    residual[0] = pixel[0] - T(observed_.x());
+    residual[1] = pixel[1] - T(observed_.y());
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
+                                     const Eigen::Vector3d& board_point,
+                                     const Eigen::Vector2d& uv) {
+    return new ceres::AutoDiffCostFunction<BentStereoReprojectionResidual, 2, kNumIntrinsics,
+                                           kPoseSize, kPoseSize, kBoardBendSize>(
+        new BentStereoReprojectionResidual(observed, board_point, uv));
+  }
+
+  Eigen::Vector2d observed_;
+  Eigen::Vector3d board_point_;
+  Eigen::Vector2d uv_;
 };
 
 // Pixel -> normalised undistorted coordinates with the scalar type of the parameters.
@@ -212,16 +289,18 @@ bool ReconCornerWhitening(const T* left_intrinsics, const T* right_intrinsics,
 // determined direction (fx −1 % at σ = 0.5 px in the simulation).
 struct ReconCornerResidual {
   ReconCornerResidual(const Eigen::Vector2d& left_pixel, const Eigen::Vector2d& right_pixel,
-                      const Eigen::Vector3d& board_point, double weight)
+                      const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv, double weight)
       : left_pixel_(left_pixel),
         right_pixel_(right_pixel),
         board_point_(board_point),
+        uv_(uv),
         weight_(weight) {}
 
   template <typename T>
   bool operator()(const T* left_intrinsics, const T* right_intrinsics, const T* left_from_board,
-                  const T* right_from_left, T* residual) const {
-    const T board[3] = {T(board_point_.x()), T(board_point_.y()), T(board_point_.z())};
+                  const T* right_from_left, const T* bend, T* residual) const {
+    T board[3];
+    BentBoardPoint(board_point_, uv_, bend, board);
     T left[3], right[3], left_predicted[2], right_predicted[2];
     TransformPoint(left_from_board, board, left);
     TransformPoint(right_from_left, left, right);
@@ -263,14 +342,16 @@ struct ReconCornerResidual {
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& left_pixel,
                                      const Eigen::Vector2d& right_pixel,
-                                     const Eigen::Vector3d& board_point, double weight) {
+                                     const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv,
+                                     double weight) {
     return new ceres::AutoDiffCostFunction<ReconCornerResidual, 7, kNumIntrinsics, kNumIntrinsics,
-                                           kPoseSize, kPoseSize>(
-        new ReconCornerResidual(left_pixel, right_pixel, board_point, weight));
+                                           kPoseSize, kPoseSize, kBoardBendSize>(
+        new ReconCornerResidual(left_pixel, right_pixel, board_point, uv, weight));
   }
 
   Eigen::Vector2d left_pixel_, right_pixel_;
   Eigen::Vector3d board_point_;
+  Eigen::Vector2d uv_;
   double weight_;
 };
 

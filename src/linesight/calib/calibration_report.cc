@@ -86,10 +86,20 @@ nlohmann::json NullableNumber(double v) {
   return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
 }
 
+// The observations with the board as the estimate models it (bent by recon, else as given).
+StereoObservations OnEstimatedBoard(const StereoObservations& obs,
+                                    const StereoCalibrationResult& est) {
+  if (est.board_bend == BoardBend{}) return obs;
+  StereoObservations bent = obs;
+  bent.board = BendBoard(obs.board, est.board_bend);
+  return bent;
+}
+
 }  // namespace
 
-ReprojectionCovariance ComputeReprojectionCovariance(const StereoObservations& obs,
+ReprojectionCovariance ComputeReprojectionCovariance(const StereoObservations& observations,
                                                      const StereoCalibrationResult& estimate) {
+  const StereoObservations obs = OnEstimatedBoard(observations, estimate);
   StereoCalibrationResult at = estimate;  // the problem needs mutable parameter blocks
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
@@ -195,7 +205,8 @@ StereoCalibration MakeStereoCalibration(const StereoCalibrationResult& est, cv::
   return calib;
 }
 
-double StereoRms(const StereoObservations& obs, const StereoCalibrationResult& est) {
+double StereoRms(const StereoObservations& observations, const StereoCalibrationResult& est) {
+  const StereoObservations obs = OnEstimatedBoard(observations, est);
   double sum2 = 0;
   int count = 0;
   for (size_t v = 0; v < obs.size(); ++v) {
@@ -206,8 +217,9 @@ double StereoRms(const StereoObservations& obs, const StereoCalibrationResult& e
   return count ? std::sqrt(sum2 / count) : kNaN;
 }
 
-CalibrationReport EvaluateCalibration(const StereoObservations& obs,
+CalibrationReport EvaluateCalibration(const StereoObservations& observations,
                                       const StereoCalibrationResult& est) {
+  const StereoObservations obs = OnEstimatedBoard(observations, est);
   CalibrationReport report;
   double left_sum = 0, right_sum = 0;
   int left_count = 0, right_count = 0;
@@ -227,7 +239,7 @@ CalibrationReport EvaluateCalibration(const StereoObservations& obs,
   }
   report.left_rms_px = left_count ? std::sqrt(left_sum / left_count) : kNaN;
   report.right_rms_px = right_count ? std::sqrt(right_sum / right_count) : kNaN;
-  report.stereo_rms_px = StereoRms(obs, est);
+  report.stereo_rms_px = StereoRms(observations, est);
   report.calibration = MakeStereoCalibration(est, obs.image_size);
   const StereoCalibration& calib = report.calibration;
 
@@ -283,7 +295,7 @@ CalibrationReport EvaluateCalibration(const StereoObservations& obs,
         100.0 * report.reconstruction_rmse_m / (true_distance_sum / report.reconstruction_pairs);
   }
 
-  const ReprojectionCovariance covariance = ComputeReprojectionCovariance(obs, est);
+  const ReprojectionCovariance covariance = ComputeReprojectionCovariance(observations, est);
   report.stddev_valid = covariance.valid;
   for (int i = 0; i < kNumIntrinsics; ++i) {
     report.left_stddev[i] =
@@ -351,6 +363,8 @@ nlohmann::json ReportToJson(const StereoDetections& detections, const StereoCali
                            {est.right_from_left.params[3], est.right_from_left.params[4],
                             est.right_from_left.params[5]}},
                           {"baseline_m", est.right_from_left.Translation().norm()}};
+  // b0 b1 b2 of BendBoard: sag (board units) at u = ±1, v = ±1 and the twist; zero = flat board.
+  j["board_bend"] = {est.board_bend[0], est.board_bend[1], est.board_bend[2]};
   j["rms_px"] = {{"left", report.left_rms_px},
                  {"right", report.right_rms_px},
                  {"stereo", report.stereo_rms_px}};

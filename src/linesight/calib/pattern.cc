@@ -164,6 +164,31 @@ BoardGeometry MakeBoardGeometry(const PatternSpec& spec) {
   return board;
 }
 
+std::vector<Eigen::Vector2d> BoardBendCoordinates(const BoardGeometry& board) {
+  LS_CHECK(!board.points.empty());
+  Eigen::Vector2d low = board.points[0].head<2>(), high = low;
+  for (const Eigen::Vector3d& p : board.points) {
+    low = low.cwiseMin(p.head<2>());
+    high = high.cwiseMax(p.head<2>());
+  }
+  const Eigen::Vector2d centre = 0.5 * (low + high);
+  const Eigen::Vector2d half = (0.5 * (high - low)).cwiseMax(1e-12);
+  std::vector<Eigen::Vector2d> uv;
+  for (const Eigen::Vector3d& p : board.points)
+    uv.push_back((p.head<2>() - centre).cwiseQuotient(half));
+  return uv;
+}
+
+BoardGeometry BendBoard(const BoardGeometry& board, const BoardBend& bend) {
+  BoardGeometry bent = board;
+  const std::vector<Eigen::Vector2d> uv = BoardBendCoordinates(board);
+  for (size_t i = 0; i < bent.points.size(); ++i) {
+    const double u = uv[i].x(), v = uv[i].y();
+    bent.points[i].z() += bend[0] * u * u + bend[1] * v * v + bend[2] * u * v;
+  }
+  return bent;
+}
+
 void DetectionOptions::Check() const {
   CheckOption(subpixel_half_window >= 1 && subpixel_half_window <= 50,
               "DetectionOptions.subpixel_half_window", subpixel_half_window, "must be in [1, 50]");

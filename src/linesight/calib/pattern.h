@@ -54,6 +54,15 @@ struct BoardGeometry {
 };
 BoardGeometry MakeBoardGeometry(const PatternSpec& spec);
 
+// A shared out-of-plane bend of the board (recon's board-shape model, stereo_calibrator.h): point
+// `id` moves along the board normal by b0·u² + b1·v² + b2·u·v (m), (u, v) =
+// BoardBendCoordinates(board)[id] its board coordinates scaled to [−1, 1] over the point grid.
+constexpr int kBoardBendSize = 3;
+using BoardBend = std::array<double, kBoardBendSize>;
+std::vector<Eigen::Vector2d> BoardBendCoordinates(const BoardGeometry& board);
+// The board with its points bent (the adjacent pairs keep their nominal distances).
+BoardGeometry BendBoard(const BoardGeometry& board, const BoardBend& bend);
+
 // cv::aruco predefined dictionary id of a dictionary name ("4x4_50", ...); throws UsageError.
 int ArucoDictionaryId(const std::string& name);
 

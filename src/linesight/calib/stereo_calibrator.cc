@@ -16,6 +16,8 @@ namespace linesight::calib {
 
 namespace {
 
+using detail::BentReprojectionResidual;
+using detail::BentStereoReprojectionResidual;
 using detail::ReconCornerResidual;
 using detail::ReconstructionDistanceResidual;
 using detail::ReprojectionResidual;
@@ -136,8 +138,26 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
   problem.AddParameterBlock(left_intrinsics, kNumIntrinsics);
   problem.AddParameterBlock(right_intrinsics, kNumIntrinsics);
   problem.AddParameterBlock(right_from_left, kPoseSize);
+  // recon estimates the board's bend (or holds it at zero); zhang keeps the flat board.
+  double* bend = result->board_bend.data();
+  if (recon_terms) {
+    problem.AddParameterBlock(bend, kBoardBendSize);
+    if (!options.recon_board_bend) problem.SetParameterBlockConstant(bend);
+  }
   const BoardGeometry& board = obs.board;
+  const std::vector<Eigen::Vector2d> uv = BoardBendCoordinates(board);
   const double f0 = result->left.fx();
+  // One camera's reprojection term, on the bent board for recon.
+  const auto add_reprojection = [&](const Eigen::Vector2d& pixel, int id, double* intrinsics,
+                                    double* pose) {
+    if (recon_terms) {
+      problem.AddResidualBlock(BentReprojectionResidual::Create(pixel, board.points[id], uv[id]),
+                               nullptr, intrinsics, pose, bend);
+    } else {
+      problem.AddResidualBlock(ReprojectionResidual::Create(pixel, board.points[id]), nullptr,
+                               intrinsics, pose);
+    }
+  };
   for (size_t v = 0; v < obs.size(); ++v) {
     const ViewObservations& left = obs.left[v];
     const ViewObservations& right = obs.right[v];
@@ -158,31 +178,34 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
       for (size_t k = 0; k < left.ids.size() && recon_corners; ++k) {
         const auto it = common.find(left.ids[k]);
         if (it == common.end()) continue;
-        problem.AddResidualBlock(
-            ReconCornerResidual::Create(left.pixels[k], it->second.second,
-                                        board.points[left.ids[k]], options.recon_point_weight),
-            nullptr, left_intrinsics, right_intrinsics, pose, right_from_left);
+        problem.AddResidualBlock(ReconCornerResidual::Create(
+                                     left.pixels[k], it->second.second, board.points[left.ids[k]],
+                                     uv[left.ids[k]], options.recon_point_weight),
+                                 nullptr, left_intrinsics, right_intrinsics, pose, right_from_left,
+                                 bend);
         as_recon_corner.insert(left.ids[k]);
       }
       for (size_t k = 0; k < left.ids.size(); ++k) {
         if (as_recon_corner.count(left.ids[k])) continue;
-        problem.AddResidualBlock(
-            ReprojectionResidual::Create(left.pixels[k], board.points[left.ids[k]]), nullptr,
-            left_intrinsics, pose);
+        add_reprojection(left.pixels[k], left.ids[k], left_intrinsics, pose);
       }
       for (size_t k = 0; k < right.ids.size(); ++k) {
         if (as_recon_corner.count(right.ids[k])) continue;
-        problem.AddResidualBlock(
-            StereoReprojectionResidual::Create(right.pixels[k], board.points[right.ids[k]]),
-            nullptr, right_intrinsics, pose, right_from_left);
+        const int id = right.ids[k];
+        if (recon_terms) {
+          problem.AddResidualBlock(
+              BentStereoReprojectionResidual::Create(right.pixels[k], board.points[id], uv[id]),
+              nullptr, right_intrinsics, pose, right_from_left, bend);
+        } else {
+          problem.AddResidualBlock(
+              StereoReprojectionResidual::Create(right.pixels[k], board.points[id]), nullptr,
+              right_intrinsics, pose, right_from_left);
+        }
       }
     } else if (!right.empty() && result->right_only_from_board[v]) {
       double* pose = result->right_only_from_board[v]->params.data();
-      for (size_t k = 0; k < right.ids.size(); ++k) {
-        problem.AddResidualBlock(
-            ReprojectionResidual::Create(right.pixels[k], board.points[right.ids[k]]), nullptr,
-            right_intrinsics, pose);
-      }
+      for (size_t k = 0; k < right.ids.size(); ++k)
+        add_reprojection(right.pixels[k], right.ids[k], right_intrinsics, pose);
     }
     if (!recon_distances || !obs.IsPair(v) || !result->left_from_board[v]) continue;
     const Pose& left_from_board = *result->left_from_board[v];

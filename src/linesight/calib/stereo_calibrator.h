@@ -40,6 +40,10 @@
 //                reconstruction error plus its epipolar residual (1 dof).
 //                The distance term is an additive, non-likelihood term and biased under noise
 //                (E|X̂_i − X̂_j| exceeds the true length; fx 5 % low at w_d = 0.3): available, off.
+//                Optional board-shape model (recon_board_bend, off): every recon term sees the
+//                board points bent along the board normal by a shared quadratic
+//                b0·u² + b1·v² + b2·u·v (BendBoard; 3 parameters for all views) estimated with the
+//                rest; a printed board is not flat. The report then evaluates on the bent board.
 // opencv         cv::calibrateCamera per camera, then
 // cv::stereoCalibrate(CALIB_USE_INTRINSIC_GUESS) on
 //                the pair views; board poses are refined afterwards (pose only, OpenCV's parameters
@@ -103,6 +107,8 @@ struct StereoCalibrationOptions {
   double recon_point_weight = 1.0;
   double recon_distance_weight =
       0.0;  // w_d of the recon objective, >= 0 (biased under noise, see above)
+  // recon: estimate the board's shared quadratic bend (BoardBend) instead of assuming it flat.
+  bool recon_board_bend = false;
 
   void Check() const;
 };
@@ -116,6 +122,8 @@ struct StereoCalibrationResult {
   // camera for views that only the right camera saw. For pair views the right pose is
   // right_from_left·left pose.
   std::vector<std::optional<Pose>> left_from_board, right_only_from_board;
+  // The board's bend (m; BendBoard): estimated by recon with recon_board_bend, else zero.
+  BoardBend board_bend{};
   double method_reported_rms =
       -1;  // RMS reported by the method itself (OpenCV's return value), -1 if none
 };

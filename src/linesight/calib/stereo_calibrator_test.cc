@@ -88,10 +88,13 @@ TEST(ReconCornerResidual, EqualsTheReprojectionChiSquareToFirstOrder) {
       const Eigen::Vector4d e(noise(rng), noise(rng), noise(rng), noise(rng));
       const Eigen::Vector2d left_observed = left_exact - e.head<2>();
       const Eigen::Vector2d right_observed = right_exact - e.tail<2>();
-      const detail::ReconCornerResidual cost(left_observed, right_observed, board_point, weight);
+      const detail::ReconCornerResidual cost(left_observed, right_observed, board_point,
+                                             Eigen::Vector2d(0.4, -0.7), weight);
+      const BoardBend flat{};
       double residual[7];
       ASSERT_TRUE(cost(rig.left.params.data(), rig.right.params.data(),
-                       left_from_board.params.data(), rig.right_from_left.params.data(), residual));
+                       left_from_board.params.data(), rig.right_from_left.params.data(),
+                       flat.data(), residual));
       const Eigen::Map<const Eigen::Matrix<double, 7, 1>> r(residual);
       EXPECT_NEAR(r.squaredNorm(), e.squaredNorm(), 1e-3 * e.squaredNorm());
       if (weight == 0) {
@@ -124,6 +127,31 @@ TEST(CalibrateStereo, RecoversTheRigExactlyWithoutNoise) {
       EXPECT_NEAR(r.right_from_left.params[i], rig.right_from_left.params[i], 1e-6);
     EXPECT_LT(StereoRms(obs, r), 1e-4);
   }
+}
+
+// recon's board-shape model: corners of a bent board (2 mm sag, 0.5 mm twist over a 320 x 200 mm
+// grid) are fitted exactly with the bend estimated, and not by the flat-board model.
+TEST(CalibrateStereo, ReconEstimatesTheBendOfABentBoard) {
+  SimulationRig rig = DefaultSimulationRig();
+  std::mt19937_64 rng(5);
+  const auto poses = RandomBoardPoses(rig, 10, BoardPoseOptions(), rng);
+  const BoardBend bend = {0.002, -0.001, 0.0005};
+  const BoardGeometry flat = rig.board;
+  rig.board = BendBoard(flat, bend);
+  StereoObservations obs = SynthesizeObservations(rig, poses, 0.0, rng);
+  obs.board = flat;  // the calibrator is told the nominal, flat board
+  StereoCalibrationOptions options = Options(CalibrationMethod::kRecon);
+  options.recon_board_bend = true;
+  const StereoCalibrationResult bent = CalibrateStereo(obs, options);
+  for (int i = 0; i < kBoardBendSize; ++i) EXPECT_NEAR(bent.board_bend[i], bend[i], 1e-6);
+  for (int i : {kFx, kFy, kCx, kCy}) EXPECT_NEAR(bent.left.params[i], rig.left.params[i], 1e-2);
+  for (int i = 3; i < kPoseSize; ++i)
+    EXPECT_NEAR(bent.right_from_left.params[i], rig.right_from_left.params[i], 1e-5);
+  EXPECT_LT(StereoRms(obs, bent), 1e-3);  // evaluated on the bent board
+  const StereoCalibrationResult assumed_flat =
+      CalibrateStereo(obs, Options(CalibrationMethod::kZhang));
+  EXPECT_EQ(assumed_flat.board_bend, BoardBend{});
+  EXPECT_GT(StereoRms(obs, assumed_flat), 0.01);
 }
 
 TEST(CalibrateStereo, NoisyEstimateIsConsistentWithTheCramerRaoBound) {
