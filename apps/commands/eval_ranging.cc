@@ -273,6 +273,52 @@ std::string MakeSvgPlot(const std::vector<CellStats>& cells,
   return svg;
 }
 
+// One line of --diagnose. "gt-est" = RangeObstacle on the ground-truth disparity map (the
+// estimator's definition error without matching error); "front" = the obstacle's pixels whose true
+// depth lies within 1 % of the true distance (its nearest surface): how many there are, how many
+// the ranging map has, and the median matched-minus-true disparity on them. The ground truth lives
+// in the TRUE rectified frame, so the per-pixel comparison is exact for the true calibration only.
+void PrintDiagnosis(const std::string& type, const std::string& calibration, int run,
+                    const sim::PowerLineScene& scene, const sim::RenderedObstacle& obstacle,
+                    const cv::Rect& roi, const RangingPipeline& pipeline, const RangingFrame& frame,
+                    const RangeResult& result) {
+  const StereoGeometry truth_geometry = GeometryFromCalibration(scene.calibration);
+  // The pipeline's ranging options (their depth range already widened as RangeRois uses it).
+  const RangeResult gt =
+      RangeObstacle(scene.disparity, truth_geometry, roi, pipeline.options().ranging);
+  const cv::Mat& d = pipeline.RangingDisparity(frame);
+  std::vector<float> errors;
+  int front = 0;
+  for (int y = roi.y; y < roi.br().y; ++y) {
+    for (int x = roi.x; x < roi.br().x; ++x) {
+      if (scene.obstacle_mask.at<uchar>(y, x) != obstacle.id) continue;
+      if (scene.depth.at<float>(y, x) > 1.01 * obstacle.distance_m) continue;
+      ++front;
+      if (IsValidDisparity(d.at<float>(y, x)))
+        errors.push_back(d.at<float>(y, x) - scene.disparity.at<float>(y, x));
+    }
+  }
+  double median_error = NAN;
+  if (!errors.empty()) {
+    std::nth_element(errors.begin(), errors.begin() + long(errors.size() / 2), errors.end());
+    median_error = errors[errors.size() / 2];
+  }
+  const double true_d = truth_geometry.DisparityFromDepth(obstacle.distance_m);
+  std::fprintf(stderr,
+               "diag %s %s run %d: truth %.4f m (d %.3f px) box %d,%d,%dx%d | measured %s %.4f m "
+               "(%+.2f %%) d %.3f sigma_d %.3f sigma %.4f px_obst %d | gt-est %s %.4f m (%+.2f %%) "
+               "d %.3f | front %d px, %zu matched, median err %+.3f px\n",
+               calibration.c_str(), type.c_str(), run, obstacle.distance_m, true_d, obstacle.box.x,
+               obstacle.box.y, obstacle.box.width, obstacle.box.height, result.ok() ? "ok" : "--",
+               result.distance_m,
+               result.ok() ? 100.0 * (result.distance_m / obstacle.distance_m - 1.0) : 0.0,
+               result.disparity_px, result.disparity_sigma_px, result.sigma_m,
+               result.obstacle_pixels, gt.ok() ? "ok" : "--", gt.distance_m,
+               gt.ok() ? 100.0 * (gt.distance_m / obstacle.distance_m - 1.0) : 0.0, gt.disparity_px,
+               front, errors.size(), median_error);
+  if (!result.ok()) std::fprintf(stderr, "  reason: %s\n", result.reason.c_str());
+}
+
 std::vector<double> ParseDoubles(const std::string& text, const char* what) {
   std::vector<double> out;
   std::stringstream ss(text);
@@ -349,6 +395,11 @@ int RunEvalRanging(int argc, char** argv) {
   app.add_option("--json", json_path, "report (- for stdout)");
   app.add_option("--plot", plot_path, "SVG plot of relative error vs distance");
   app.add_option("--markdown", markdown_path, "write the table as Markdown too");
+  bool diagnose = false;
+  app.add_flag("--diagnose", diagnose,
+               "print one line per run and calibration to stderr: truth, measured, the same "
+               "estimator on the ground-truth disparity, and the matcher's disparity error on the "
+               "obstacle's nearest-surface pixels (for finding a cell's bias)");
   return RunCommand(app, argc, argv, [&] {
     if (runs < 1) throw UsageError("--runs must be >= 1");
     options.params = ParseParams(raw_params);
@@ -461,6 +512,10 @@ int RunEvalRanging(int argc, char** argv) {
             const RangingFrame frame =
                 pipelines[c].Process(scene.left, scene.right, cv::Range(roi.y, roi.br().y));
             results[c].push_back(pipelines[c].RangeRois(frame, {roi}).front());
+            if (diagnose) {
+              PrintDiagnosis(type_names[t], calibs[c].first, run, scene, obstacle, roi,
+                             pipelines[c], frame, results[c].back());
+            }
           }
           progress.Advance();
         }
