@@ -171,7 +171,9 @@ cv::VideoCapture OpenCapture(const std::string& name, bool is_device, const Fram
         !std::filesystem::exists(name)) {
       throw InputError(fmt::format("source '{}': video file '{}' does not exist", spec, name));
     }
-    capture.open(name, cv::CAP_ANY);
+    // FFmpeg for files and URLs, GStreamer for pipelines ("... ! appsink"). Not CAP_ANY: probing
+    // every backend loads GStreamer's plugins (and libusb) for any file, slowly and leakily.
+    capture.open(name, name.find('!') != std::string::npos ? cv::CAP_GSTREAMER : cv::CAP_FFMPEG);
   }
   if (!capture.isOpened()) {
     throw InputError(fmt::format("source '{}': OpenCV could not open {} '{}'", spec,
