@@ -11,6 +11,17 @@
 
 namespace linesight::calib::detail {
 
+// observed − projection of a camera-frame point (px); false when it does not project.
+template <typename T>
+bool PixelResidual(const T* intrinsics, const T* camera, const Eigen::Vector2d& observed,
+                   T* residual) {
+  T pixel[2];
+  if (!Project(intrinsics, camera, pixel)) return false;
+  residual[0] = pixel[0] - T(observed.x());
+  residual[1] = pixel[1] - T(observed.y());
+  return true;
+}
+
 // Pixel residual (predicted − observed) of a board point seen by a camera with pose
 // camera_from_board.
 struct ReprojectionResidual {
@@ -22,11 +33,7 @@ struct ReprojectionResidual {
     const T board[3] = {T(board_point_.x()), T(board_point_.y()), T(board_point_.z())};
     T camera[3];
     TransformPoint(camera_from_board, board, camera);
-    T pixel[2];
-    if (!Project(intrinsics, camera, pixel)) return false;
-    residual[0] = pixel[0] - T(observed_.x());
-    residual[1] = pixel[1] - T(observed_.y());
-    return true;
+    return PixelResidual(intrinsics, camera, observed_, residual);
   }
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
@@ -52,11 +59,7 @@ struct StereoReprojectionResidual {
     T left[3], right[3];
     TransformPoint(left_from_board, board, left);
     TransformPoint(right_from_left, left, right);
-    T pixel[2];
-    if (!Project(intrinsics, right, pixel)) return false;
-    residual[0] = pixel[0] - T(observed_.x());
-    residual[1] = pixel[1] - T(observed_.y());
-    return true;
+    return PixelResidual(intrinsics, right, observed_, residual);
   }
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
@@ -92,13 +95,10 @@ struct BentReprojectionResidual {
   template <typename T>
   bool operator()(const T* intrinsics, const T* camera_from_board, const T* bend,
                   T* residual) const {
-    T board[3], camera[3], pixel[2];
+    T board[3], camera[3];
     BentBoardPoint(board_point_, uv_, bend, board);
     TransformPoint(camera_from_board, board, camera);
-    if (!Project(intrinsics, camera, pixel)) return false;
-    residual[0] = pixel[0] - T(observed_.x());
-    residual[1] = pixel[1] - T(observed_.y());
-    return true;
+    return PixelResidual(intrinsics, camera, observed_, residual);
   }
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
@@ -123,14 +123,11 @@ struct BentStereoReprojectionResidual {
   template <typename T>
   bool operator()(const T* intrinsics, const T* left_from_board, const T* right_from_left,
                   const T* bend, T* residual) const {
-    T board[3], left[3], right[3], pixel[2];
+    T board[3], left[3], right[3];
     BentBoardPoint(board_point_, uv_, bend, board);
     TransformPoint(left_from_board, board, left);
     TransformPoint(right_from_left, left, right);
-    if (!Project(intrinsics, right, pixel)) return false;
-    residual[0] = pixel[0] - T(observed_.x());
-    residual[1] = pixel[1] - T(observed_.y());
-    return true;
+    return PixelResidual(intrinsics, right, observed_, residual);
   }
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
