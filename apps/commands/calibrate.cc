@@ -90,8 +90,8 @@ int RunCalibrate(int argc, char** argv) {
     if (!json_path.empty() && json_path != "-") CheckOutputFolder(json_path, "--json");
     calib::DetectionOptions detection_options;
     detection_options.sector_based = detector == "sb";
-    const auto left_paths = calib::ExpandGlob(left_glob);
-    const auto right_paths = calib::ExpandGlob(right_glob);
+    const auto left_paths = ExpandGlob(left_glob);
+    const auto right_paths = ExpandGlob(right_glob);
     const calib::StereoDetections detections =
         calib::DetectStereoPairs(left_paths, right_paths, spec, detection_options);
     for (const calib::PairDetection& pair : detections.pairs) {

@@ -1,7 +1,5 @@
 #include "linesight/acquire/frame_source.h"
 
-#include <glob.h>
-
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
@@ -50,25 +48,6 @@ std::vector<std::string> SplitParts(const std::string& spec, const std::string& 
   return parts;
 }
 
-std::vector<std::filesystem::path> SortedGlob(const std::string& pattern) {
-  glob_t result{};
-  std::vector<std::filesystem::path> paths;
-  if (::glob(pattern.c_str(), 0, nullptr, &result) == 0) {
-    for (size_t i = 0; i < result.gl_pathc; ++i) paths.emplace_back(result.gl_pathv[i]);
-  }
-  globfree(&result);
-  std::sort(paths.begin(), paths.end());
-  return paths;
-}
-
-void CheckPairSizes(const cv::Mat& left, const cv::Mat& right, const std::string& what) {
-  if (left.size() != right.size()) {
-    throw InputError(
-        fmt::format("{}: left frame is {}x{} but right frame is {}x{}; they must match", what,
-                    left.cols, left.rows, right.cols, right.rows));
-  }
-}
-
 // ---------------------------------------------------------------------------------------------
 // Still images.
 // ---------------------------------------------------------------------------------------------
@@ -95,7 +74,7 @@ class ImageSequenceSource final : public FrameSource {
     const size_t n = left_.size();
     if (next_ >= n && !repeat_ && !loop_) return std::nullopt;
     const size_t i = repeat_ ? 0 : next_ % n;
-    StereoFrame frame = i == 0 && first_ ? *first_ : *Load(i);
+    StereoFrame frame = i == 0 && first_ ? *first_ : Load(i);
     if (repeat_) {  // one pair for ever: hand out copies so that callers may draw on them
       frame.left = frame.left.clone();
       frame.right = frame.right.clone();
@@ -108,13 +87,12 @@ class ImageSequenceSource final : public FrameSource {
   std::string Describe() const override { return description_; }
 
  private:
-  std::optional<StereoFrame> Load(size_t i) const {
+  // ReadImage(kColor) gives 8-bit BGR whatever the file holds.
+  StereoFrame Load(size_t i) const {
     StereoFrame frame;
     frame.left = ReadImage(left_[i], ImageColor::kColor);
     frame.right = ReadImage(right_[i], ImageColor::kColor);
     CheckSameSize(frame.left, left_[i], frame.right, right_[i]);
-    frame.left = detail::ToBgr8(frame.left, left_[i].string());
-    frame.right = detail::ToBgr8(frame.right, right_[i].string());
     return frame;
   }
 
@@ -250,7 +228,7 @@ class CaptureSource final : public FrameSource {
     } else {
       frame.left = detail::ToBgr8(images[0], spec_);
       frame.right = detail::ToBgr8(images[1], spec_);
-      CheckPairSizes(frame.left, frame.right, fmt::format("source '{}'", spec_));
+      CheckSameSize(frame.left, names_[0], frame.right, names_[1]);
     }
     return frame;
   }
@@ -270,8 +248,8 @@ class CaptureSource final : public FrameSource {
 class SideBySideImageSource final : public FrameSource {
  public:
   SideBySideImageSource(const std::string& path, const std::string& spec) : path_(path) {
-    const cv::Mat image = detail::ToBgr8(ReadImage(path, ImageColor::kColor), path);
-    detail::SplitSideBySide(image, fmt::format("source '{}'", spec), &left_, &right_);
+    detail::SplitSideBySide(ReadImage(path, ImageColor::kColor), fmt::format("source '{}'", spec),
+                            &left_, &right_);
   }
   std::optional<StereoFrame> Read() override {
     StereoFrame frame{left_.clone(), right_.clone(), next_++, SecondsSince(start_)};
@@ -296,8 +274,9 @@ class SyntheticSource final : public FrameSource {
  public:
   SyntheticSource(uint64_t seed, const FrameSourceOptions& options)
       : seed_(seed),
-        renderer_(MakeOptions(seed, options)),
-        calibration_(renderer_.Capture(renderer_.DefaultNoiseSeed()).calibration) {}
+        scene_(MakeOptions(seed, options)),
+        renderer_(scene_),
+        calibration_(sim::MakeStereoCalibration(scene_.rig)) {}
 
   std::optional<StereoFrame> Read() override {
     // Fresh sensor noise per frame, deterministic in (seed, frame index).
@@ -322,8 +301,9 @@ class SyntheticSource final : public FrameSource {
   }
 
   uint64_t seed_;
+  sim::PowerLineSceneOptions scene_;
   sim::PowerLineSceneRenderer renderer_;
-  StereoCalibration calibration_;
+  StereoCalibration calibration_;  // the scene's true calibration (what every capture carries)
   int64_t next_ = 0;
   Clock::time_point start_ = Clock::now();
 };
@@ -388,13 +368,8 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& spec,
   }
   if (scheme == "images") {
     const auto parts = SplitParts(spec, body, 2);
-    auto left = SortedGlob(parts[0]);
-    auto right = SortedGlob(parts[1]);
-    for (int i = 0; i < 2; ++i) {
-      if ((i == 0 ? left : right).empty()) {
-        throw InputError(fmt::format("source '{}': '{}' matches no file", spec, parts[i]));
-      }
-    }
+    auto left = ExpandGlob(parts[0]);  // InputError naming the pattern when nothing matches
+    auto right = ExpandGlob(parts[1]);
     const std::string description =
         fmt::format("image sequence {} + {} ({} pairs)", parts[0], parts[1], left.size());
     return std::make_unique<ImageSequenceSource>(std::move(left), std::move(right),

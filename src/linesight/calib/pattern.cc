@@ -1,7 +1,5 @@
 #include "linesight/calib/pattern.h"
 
-#include <glob.h>
-
 #include <algorithm>
 #include <charconv>
 #include <limits>
@@ -299,19 +297,6 @@ int StereoDetections::RightCount() const {
 int StereoDetections::BothCount() const {
   return static_cast<int>(std::count_if(pairs.begin(), pairs.end(),
                                         [](auto& p) { return p.left.found && p.right.found; }));
-}
-
-std::vector<std::filesystem::path> ExpandGlob(const std::string& pattern) {
-  glob_t result{};
-  const int status = ::glob(pattern.c_str(), 0, nullptr, &result);
-  std::vector<std::filesystem::path> paths;
-  if (status == 0) {
-    for (size_t i = 0; i < result.gl_pathc; ++i) paths.emplace_back(result.gl_pathv[i]);
-  }
-  globfree(&result);
-  if (paths.empty()) throw InputError(fmt::format("'{}' matches no file", pattern));
-  std::sort(paths.begin(), paths.end());
-  return paths;
 }
 
 StereoDetections DetectStereoPairs(const std::vector<std::filesystem::path>& left_paths,

@@ -111,10 +111,6 @@ struct StereoDetections {
   int BothCount() const;
 };
 
-// Expands a glob (`*`, `?` and `[...]` in the file name part) into sorted paths; throws InputError
-// when nothing matches.
-std::vector<std::filesystem::path> ExpandGlob(const std::string& pattern);
-
 // Reads and detects every pair (progress bar on stderr). Throws InputError when the counts differ,
 // an image cannot be read, or the sizes differ between left and right or across pairs.
 StereoDetections DetectStereoPairs(const std::vector<std::filesystem::path>& left_paths,

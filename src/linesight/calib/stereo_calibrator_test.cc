@@ -9,6 +9,7 @@
 #include "linesight/calib/calibration_report.h"
 #include "linesight/calib/simulation.h"
 #include "linesight/core/error.h"
+#include "linesight/io/image_io.h"
 
 namespace linesight::calib {
 namespace {

@@ -1,5 +1,8 @@
 #include "linesight/io/image_io.h"
 
+#include <glob.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <system_error>
@@ -103,6 +106,19 @@ void CheckSameSize(const cv::Mat& left, const fs::path& left_path, const cv::Mat
         "{} is {}x{} but {} is {}x{}: the two images must have the same size", left_path.string(),
         left.cols, left.rows, right_path.string(), right.cols, right.rows));
   }
+}
+
+std::vector<std::filesystem::path> ExpandGlob(const std::string& pattern) {
+  glob_t result{};
+  const int status = ::glob(pattern.c_str(), 0, nullptr, &result);
+  std::vector<std::filesystem::path> paths;
+  if (status == 0) {
+    for (size_t i = 0; i < result.gl_pathc; ++i) paths.emplace_back(result.gl_pathv[i]);
+  }
+  globfree(&result);
+  if (paths.empty()) throw InputError(fmt::format("'{}' matches no file", pattern));
+  std::sort(paths.begin(), paths.end());
+  return paths;
 }
 
 }  // namespace linesight

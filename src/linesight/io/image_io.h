@@ -2,6 +2,8 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -26,5 +28,9 @@ void WriteImage(const std::filesystem::path& path, const cv::Mat& image);
 // 320x240").
 void CheckSameSize(const cv::Mat& left, const std::filesystem::path& left_path,
                    const cv::Mat& right, const std::filesystem::path& right_path);
+
+// Expands a glob (`*`, `?` and `[...]` in the file name part) into sorted paths; throws InputError
+// when nothing matches.
+std::vector<std::filesystem::path> ExpandGlob(const std::string& pattern);
 
 }  // namespace linesight
