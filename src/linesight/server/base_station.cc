@@ -98,7 +98,10 @@ void BaseStation::Loop() {
       }
       const auto started = Clock::now();
       if (!Step()) break;
-      if (options_.max_frames > 0 && Snapshot().frame_index + 1 >= options_.max_frames) break;
+      if (options_.max_frames > 0) {
+        std::lock_guard lock(mutex_);
+        if (snapshot_.frame_index + 1 >= options_.max_frames) break;
+      }
       if (options_.max_fps > 0) {
         std::this_thread::sleep_until(started +
                                       std::chrono::duration<double>(1.0 / options_.max_fps));
@@ -151,17 +154,17 @@ bool BaseStation::Step() {
   nlohmann::json measured = nlohmann::json::array();
   for (size_t i = 0; i < results.size(); ++i) {
     const RangeResult& r = results[i];
-    nlohmann::json j = RangeResultToJson(r);
-    j["source"] = i < num_roi ? "roi" : "auto";
-    if (i < num_roi) j["roi_index"] = i;
-    measured.push_back(j);
     const bool roi = i < num_roi;
     const bool trackable = r.ok() && r.sigma_m > 0 &&
                            (roi || r.sigma_m <= options_.max_auto_relative_sigma * r.distance_m);
+    nlohmann::json j = RangeResultToJson(r);
+    j["source"] = roi ? "roi" : "auto";
+    if (roi) j["roi_index"] = i;
     j["tracked"] = trackable;
+    measured.push_back(std::move(j));
     if (trackable) {
       measurements.push_back(
-          {i < num_roi ? fmt::format("roi:{}", i) : std::string(), r.box, r.distance_m, r.sigma_m});
+          {roi ? fmt::format("roi:{}", i) : std::string(), r.box, r.distance_m, r.sigma_m});
     }
   }
 

@@ -161,6 +161,14 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   EXPECT_NEAR(d, 2.0, 0.06) << result->body;
   EXPECT_GT(j["tracks"][0]["sigma_m"].get<double>(), 0);
   EXPECT_EQ(j["tracks"][0]["updates"], 3);
+  // Every per-frame measurement says whether it fed a track; the damper's did.
+  ASSERT_FALSE(j["measurements"].empty());
+  int tracked = 0;
+  for (const auto& m : j["measurements"]) {
+    ASSERT_TRUE(m.contains("tracked") && m["tracked"].is_boolean()) << m.dump();
+    tracked += m["tracked"].get<bool>();
+  }
+  EXPECT_GE(tracked, 1);
 
   auto left = client.Get("/api/frame/left.jpg");
   ASSERT_TRUE(left);
