@@ -3,6 +3,9 @@
 #include <cstdio>
 #include <exception>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
 #include "linesight/core/error.h"
 
 namespace linesight::cli {
@@ -48,6 +51,22 @@ std::map<std::string, std::string> ParseParams(const std::vector<std::string>& r
     out[entry.substr(0, eq)] = entry.substr(eq + 1);
   }
   return out;
+}
+
+void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options) {
+  app.add_option("--source", *spec,
+                 fmt::format("where pairs come from: {}", fmt::join(FrameSourceSchemes(), " | ")))
+      ->required();
+  app.add_option("--width", options->width, "camera frame width (px; 0 = device default)");
+  app.add_option("--height", options->height, "camera frame height (px; 0 = device default)");
+  app.add_option("--fps", options->fps, "camera frame rate (0 = device default)");
+  app.add_flag("--loop", options->loop, "start image sequences and videos again at their end");
+  app.add_option(
+      "--synthetic-obstacles", options->synthetic_obstacles,
+      "synthetic source: type:distance_m,... (default damper:1.5,clamp:3,insulator:4.5)");
+  app.add_option("--synthetic-supersampling", options->synthetic_supersampling,
+                 "synthetic source: rays per pixel side (1 = fastest)")
+      ->capture_default_str();
 }
 
 }  // namespace linesight::cli

@@ -11,6 +11,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "linesight/acquire/frame_source.h"
 #include "linesight/core/atomic_file.h"
 #include "linesight/io/json_io.h"
 
@@ -29,6 +30,10 @@ int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>
 void AddParamOption(CLI::App& app, std::vector<std::string>* raw);
 // "p1=8,p2=32" / ["p1=8","p2=32"] -> {p1: 8, p2: 32}; throws UsageError for an entry without '='.
 std::map<std::string, std::string> ParseParams(const std::vector<std::string>& raw);
+
+// Adds --source and the capture options (--width --height --fps --loop --synthetic-*) of
+// `serve` and `acquire`.
+void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options);
 
 // Shows a study's report: markdown on stdout (unless the JSON goes to stdout), and the markdown,
 // JSON and plot files that were asked for. Report needs ToMarkdown(), ToJson() and WritePlots(dir).

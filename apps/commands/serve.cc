@@ -2,7 +2,6 @@
 // API (src/linesight/server/base_station.h) that show it.
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -14,8 +13,6 @@
 #include "commands.h"
 #include "linesight/acquire/frame_source.h"
 #include "linesight/core/error.h"
-#include "linesight/core/progress.h"
-#include "linesight/io/image_io.h"
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/ranging/ranging.h"
 #include "linesight/server/base_station.h"
@@ -30,23 +27,6 @@ extern "C" void StopOnSignal(int) {
 }
 
 }  // namespace
-
-// Shared by serve and acquire: --source and the capture options.
-void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options) {
-  app.add_option("--source", *spec,
-                 fmt::format("where pairs come from: {}", fmt::join(FrameSourceSchemes(), " | ")))
-      ->required();
-  app.add_option("--width", options->width, "camera frame width (px; 0 = device default)");
-  app.add_option("--height", options->height, "camera frame height (px; 0 = device default)");
-  app.add_option("--fps", options->fps, "camera frame rate (0 = device default)");
-  app.add_flag("--loop", options->loop, "start image sequences and videos again at their end");
-  app.add_option(
-      "--synthetic-obstacles", options->synthetic_obstacles,
-      "synthetic source: type:distance_m,... (default damper:1.5,clamp:3,insulator:4.5)");
-  app.add_option("--synthetic-supersampling", options->synthetic_supersampling,
-                 "synthetic source: rays per pixel side (1 = fastest)")
-      ->capture_default_str();
-}
 
 int RunServe(int argc, char** argv) {
   CLI::App app{
@@ -114,43 +94,6 @@ int RunServe(int argc, char** argv) {
     g_server = nullptr;
     station.Stop();
     if (!station.error().empty()) throw InputError(station.error());
-  });
-}
-
-int RunAcquire(int argc, char** argv) {
-  CLI::App app{
-      "Record stereo pairs from a source (camera, video, images, synthetic) as left_NNNN.png / "
-      "right_NNNN.png, e.g. calibration views.",
-      "acquire"};
-  std::string source_spec, out_dir;
-  int64_t frames = 1;
-  int every = 1;
-  FrameSourceOptions source_options;
-  AddSourceOptions(app, &source_spec, &source_options);
-  app.add_option("--out", out_dir, "output folder (created if missing)")->required();
-  app.add_option("--frames", frames, "pairs to write (>= 1)")->capture_default_str();
-  app.add_option("--every", every, "keep every N-th pair (>= 1)")->capture_default_str();
-  return RunCommand(app, argc, argv, [&] {
-    if (frames < 1) throw UsageError(fmt::format("--frames {}: must be >= 1", frames));
-    if (every < 1) throw UsageError(fmt::format("--every {}: must be >= 1", every));
-    auto source = OpenFrameSource(source_spec, source_options);
-    std::filesystem::create_directories(out_dir);
-    ProgressBar progress(frames, "acquiring");
-    int64_t written = 0;
-    while (written < frames) {
-      const std::optional<StereoFrame> frame = source->Read();
-      if (!frame) break;
-      if (frame->index % every != 0) continue;
-      const std::string stem = fmt::format("{:04d}.png", written);
-      WriteImage(std::filesystem::path(out_dir) / ("left_" + stem), frame->left);
-      WriteImage(std::filesystem::path(out_dir) / ("right_" + stem), frame->right);
-      ++written;
-      progress.Advance(1, stem);
-    }
-    progress.Finish();
-    std::cout << fmt::format("{} pairs from {} written to {}\n", written, source->Describe(),
-                             out_dir);
-    if (written == 0) throw InputError(fmt::format("{} delivered no frame", source->Describe()));
   });
 }
 
