@@ -72,11 +72,16 @@ void DistanceTracker::Predict(Track* t, double dt) const {
   t->state.sigma_m = std::sqrt(t->p00);
 }
 
+bool DistanceTracker::InGate(const Track& t, const DistanceMeasurement& m) const {
+  const double s = t.p00 + m.sigma_m * m.sigma_m;  // innovation variance
+  const double innovation = m.distance_m - t.state.distance_m;
+  return innovation * innovation <= options_.gate_sigmas * options_.gate_sigmas * s;
+}
+
 bool DistanceTracker::Correct(Track* t, const DistanceMeasurement& m) const {
-  const double r = m.sigma_m * m.sigma_m;
-  const double s = t->p00 + r;  // innovation variance
+  if (!InGate(*t, m)) return false;
+  const double s = t->p00 + m.sigma_m * m.sigma_m;
   const double innovation = m.distance_m - t->state.distance_m;
-  if (innovation * innovation > options_.gate_sigmas * options_.gate_sigmas * s) return false;
   const double k0 = t->p00 / s, k1 = t->p01 / s;
   t->state.distance_m += k0 * innovation;
   t->state.rate_m_s += k1 * innovation;
@@ -90,9 +95,9 @@ bool DistanceTracker::Correct(Track* t, const DistanceMeasurement& m) const {
   return true;
 }
 
-DistanceTracker::Track DistanceTracker::Start(const DistanceMeasurement& m) {
+DistanceTracker::Track DistanceTracker::Start(const DistanceMeasurement& m, int id) const {
   Track t;
-  t.state.id = next_id_++;
+  t.state.id = id;
   t.state.key = m.key.empty() ? "auto" : m.key;
   t.state.box = m.box;
   t.state.distance_m = m.distance_m;
@@ -134,17 +139,13 @@ std::vector<TrackState> DistanceTracker::Update(
       }
       if (t.state.key != "auto") continue;
       const double iou = BoxIou(t.state.box, m.box);
-      const double s = t.p00 + m.sigma_m * m.sigma_m;
-      const double innovation = m.distance_m - t.state.distance_m;
-      const bool in_gate =
-          innovation * innovation <= options_.gate_sigmas * options_.gate_sigmas * s;
-      if (iou >= options_.min_iou && in_gate && iou > best_iou) {
+      if (iou >= options_.min_iou && iou > best_iou && InGate(t, m)) {
         best = static_cast<int>(i);
         best_iou = iou;
       }
     }
     if (best < 0) {
-      started.push_back(Start(m));
+      started.push_back(Start(m, next_id_++));
       continue;
     }
     used[best] = true;
@@ -158,11 +159,9 @@ std::vector<TrackState> DistanceTracker::Update(
     } else {
       ++t.state.rejections;
       if (++t.consecutive_rejections >= options_.max_rejections) {
-        const int id = t.state.id;
+        // The same obstacle, re-acquired: it keeps its id and its rejection count.
         const int rejections = t.state.rejections;
-        t = Start(m);
-        --next_id_;  // keep the track's id: it is the same obstacle, re-acquired
-        t.state.id = id;
+        t = Start(m, t.state.id);
         t.state.rejections = rejections;
       }
     }

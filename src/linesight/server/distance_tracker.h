@@ -78,9 +78,11 @@ class DistanceTracker {
     int consecutive_rejections = 0;
   };
   void Predict(Track* track, double dt) const;
+  // The measurement passes the innovation gate of the track's prediction.
+  bool InGate(const Track& track, const DistanceMeasurement& m) const;
   // Returns false when the gate rejected the measurement.
   bool Correct(Track* track, const DistanceMeasurement& m) const;
-  Track Start(const DistanceMeasurement& m);
+  Track Start(const DistanceMeasurement& m, int id) const;
 
   DistanceTrackerOptions options_;
   std::vector<Track> tracks_;
