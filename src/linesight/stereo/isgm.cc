@@ -78,15 +78,8 @@ nlohmann::json IsgmMatcher::Settings() const {
 
 IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params) {
   IsgmOptions o;
-  // ReadSgmOptions starts from SgmOptions' defaults: put isgm's own defaults back for keys not
-  // given.
-  o.sgm = ReadSgmOptions(options, params);
-  const SgmOptions tuned = IsgmDefaultSgmOptions();
-  if (!options.params.count("census_width")) o.sgm.census_width = tuned.census_width;
-  if (!options.params.count("census_height")) o.sgm.census_height = tuned.census_height;
-  if (!options.params.count("p1")) o.sgm.p1 = tuned.p1;
-  if (!options.params.count("p2")) o.sgm.p2 = tuned.p2;
-  if (!options.params.count("p2_alpha")) o.sgm.p2_gradient_alpha = tuned.p2_gradient_alpha;
+  // isgm's SGM stage starts from its own tuned defaults; --param keys override them.
+  o.sgm = ReadSgmOptions(options, params, IsgmDefaultSgmOptions());
   PlaneRefinementOptions& r = o.refinement;
   r.superpixels.region_size = params.GetInt("superpixel_size", r.superpixels.region_size);
   r.superpixels.compactness = params.GetDouble("superpixel_compactness", r.superpixels.compactness);

@@ -377,8 +377,9 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   return result;
 }
 
-SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params) {
-  SgmOptions o;
+SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params,
+                          const SgmOptions& defaults) {
+  SgmOptions o = defaults;
   o.min_disparity = options.min_disparity;
   o.num_disparities = options.num_disparities;
   o.threads = options.threads;

@@ -125,9 +125,11 @@ class SgmMatcher final : public StereoMatcher {
 
 // Reads SgmOptions from MatcherOptions (range, threads) and its --param keys: census_width,
 // census_height, bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel
-// (none|equiangular|parabola), lr_max_diff, speckle_window, speckle_range, median. Throws
-// OptionError for invalid values.
-SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params);
+// (none|equiangular|parabola), lr_max_diff, speckle_window, speckle_range, median; keys not given
+// keep their value in `defaults` (isgm passes its own tuned set). Throws OptionError for invalid
+// values.
+SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params,
+                          const SgmOptions& defaults = SgmOptions());
 
 // Factory hook used by CreateMatcher("sgm", ...).
 std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options,
