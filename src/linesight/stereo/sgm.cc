@@ -121,69 +121,6 @@ bool LeftRightConsistent(int x, int best, const int16_t* right_best, int width, 
   return right >= 0 && std::abs(right - best) <= max_diff;
 }
 
-namespace {
-// Median of nine values with the classic 19 compare-exchange network (Paeth / Devillard).
-int16_t MedianOfNine(int16_t* p) {
-  auto sort2 = [p](int a, int b) {
-    if (p[a] > p[b]) std::swap(p[a], p[b]);
-  };
-  sort2(1, 2);
-  sort2(4, 5);
-  sort2(7, 8);
-  sort2(0, 1);
-  sort2(3, 4);
-  sort2(6, 7);
-  sort2(1, 2);
-  sort2(4, 5);
-  sort2(7, 8);
-  sort2(0, 3);
-  sort2(5, 8);
-  sort2(4, 7);
-  sort2(3, 6);
-  sort2(1, 4);
-  sort2(2, 5);
-  sort2(4, 7);
-  sort2(4, 2);
-  sort2(6, 4);
-  sort2(4, 2);
-  return p[4];
-}
-}  // namespace
-
-void MedianValid3x3(const cv::Mat& src, cv::Mat& dst, int row_begin, int row_end) {
-  LS_CHECK(src.type() == CV_16SC1 && dst.type() == CV_16SC1 && src.size() == dst.size());
-  const int w = src.cols, h = src.rows;
-  for (int y = row_begin; y < row_end; ++y) {
-    const int16_t* s = src.ptr<int16_t>(y);
-    int16_t* out = dst.ptr<int16_t>(y);
-    for (int x = 0; x < w; ++x) {
-      if (s[x] == kSgmInvalidFixed) {
-        out[x] = kSgmInvalidFixed;
-        continue;
-      }
-      if (y > 0 && y + 1 < h && x > 0 && x + 1 < w) {
-        const int16_t* up = src.ptr<int16_t>(y - 1) + x;
-        const int16_t* down = src.ptr<int16_t>(y + 1) + x;
-        int16_t v[9] = {up[-1], up[0], up[1], s[x - 1], s[x], s[x + 1], down[-1], down[0], down[1]};
-        if (std::find(v, v + 9, kSgmInvalidFixed) == v + 9) {
-          out[x] = MedianOfNine(v);
-          continue;
-        }
-      }
-      int16_t values[9];
-      int n = 0;
-      for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy) {
-        const int16_t* r = src.ptr<int16_t>(yy);
-        for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx) {
-          if (r[xx] != kSgmInvalidFixed) values[n++] = r[xx];
-        }
-      }
-      std::nth_element(values, values + (n - 1) / 2, values + n);
-      out[x] = values[(n - 1) / 2];
-    }
-  }
-}
-
 void ParallelRanges(int n, int threads, const std::function<void(int, int)>& fn) {
   threads = std::max(1, std::min(threads, n));
   if (threads <= 1) {

@@ -506,6 +506,58 @@ TEST(SgmScalarStages, LeftRightCheckByHand) {
   EXPECT_FALSE(detail::LeftRightConsistent(2, 4, right_best, 6, 1, 5));
 }
 
+// Naive lower median of the valid values of the 3×3 window (the centre must be valid).
+cv::Mat NaiveMedianValid3x3(const cv::Mat& src) {
+  cv::Mat dst(src.size(), CV_16SC1, cv::Scalar(kSgmInvalidFixed));
+  for (int y = 0; y < src.rows; ++y) {
+    for (int x = 0; x < src.cols; ++x) {
+      if (src.at<int16_t>(y, x) == kSgmInvalidFixed) continue;
+      std::vector<int16_t> values;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int yy = y + dy, xx = x + dx;
+          if (yy < 0 || yy >= src.rows || xx < 0 || xx >= src.cols) continue;
+          if (src.at<int16_t>(yy, xx) != kSgmInvalidFixed)
+            values.push_back(src.at<int16_t>(yy, xx));
+        }
+      }
+      std::sort(values.begin(), values.end());
+      dst.at<int16_t>(y, x) = values[(values.size() - 1) / 2];
+    }
+  }
+  return dst;
+}
+
+TEST_P(SgmKernelTest, MedianOfValidNeighboursEqualsReference) {
+  cv::RNG rng(17);
+  // Odd widths, a width below one vector, single rows / columns, every invalid density.
+  const std::vector<std::pair<int, int>> sizes = {{311, 239}, {33, 7}, {1, 1},  {1, 9},
+                                                  {70, 1},    {2, 2},  {65, 3}, {31, 4}};
+  for (const auto& [w, h] : sizes) {
+    for (const double invalid_fraction : {0.0, 0.3, 0.8, 1.0}) {
+      cv::Mat src(h, w, CV_16SC1);
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          // Extreme values too: INT16_MAX and INT16_MIN + 1 are valid disparities.
+          const int kind = rng.uniform(0, 20);
+          int16_t v = static_cast<int16_t>(rng.uniform(-2000, 2000));
+          if (kind == 0) v = INT16_MAX;
+          if (kind == 1) v = INT16_MIN + 1;
+          if (rng.uniform(0.0, 1.0) < invalid_fraction) v = kSgmInvalidFixed;
+          src.at<int16_t>(y, x) = v;
+        }
+      }
+      const cv::Mat want = NaiveMedianValid3x3(src);
+      cv::Mat got(h, w, CV_16SC1, cv::Scalar(0));
+      // Row ranges as threads would split them.
+      detail::MedianValid3x3(src, got, 0, h / 3);
+      detail::MedianValid3x3(src, got, h / 3, h);
+      ASSERT_EQ(cv::norm(got != want, cv::NORM_L1), 0)
+          << w << "x" << h << " invalid " << invalid_fraction;
+    }
+  }
+}
+
 TEST(SgmScalarStages, MedianOfValidNeighbours) {
   cv::Mat src(3, 3, CV_16SC1, cv::Scalar(kSgmInvalidFixed));
   src.at<int16_t>(0, 0) = 10;
