@@ -426,10 +426,16 @@ HWY_INLINE void EvenOddToNatural(DW dw, VW even, VW odd, VW* lo, VW* hi) {
 }
 #endif
 
+// With uint8 path costs a sum of at most four of them is below 1024 (10 bits) and a census cost of
+// at most 63 fits the 6 bits above it: the first sweep stores the pixel's costs there, and the
+// second reads them back instead of recomputing the Hamming distances (UsesPackedCosts).
+constexpr int kPackedCostShift = 10;
+constexpr uint16_t kPackedSumMask = (1u << kPackedCostShift) - 1;
+
 // One pixel: computes L of kPaths paths from the pixel's costs, stores them and their minima, and
 // either streams their sum into `partial` (first sweep over this row) or adds the other sweep's
 // partial sum and writes the final S into `total`.
-template <typename T, int kPaths, bool kAdd>
+template <typename T, int kPaths, bool kAdd, bool kPackedCost>
 HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* steps,
                                int full_chunks_end, int padded, size_t tail_valid_first, T p1,
                                uint16_t* HWY_RESTRICT partial, uint16_t* HWY_RESTRICT total) {
@@ -455,7 +461,27 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
     minima[p] = sentinel;
   }
   auto chunk = [&](int k, bool partial_chunk, size_t valid_lanes) HWY_ATTR {
-    const V c = hn::LoadU(d, cost + k);
+    V c;
+    VW partial_even = hn::Zero(dw), partial_odd = hn::Zero(dw);  // the other sweep's sums (kAdd)
+    if constexpr (kAdd) {
+      partial_even = hn::Load(dw, partial + k);
+      if constexpr (sizeof(T) == 1) partial_odd = hn::Load(dw, partial + k + nw);
+    }
+#if HWY_TARGET != HWY_SCALAR
+    if constexpr (kPackedCost && kAdd) {
+      // The first sweep left the costs of this chunk in the top 6 bits of its sums: even
+      // disparities in partial_even, odd ones in partial_odd, i.e. byte pairs (even, odd).
+      const VW mask = hn::Set(dw, uint16_t{kPackedSumMask});
+      c = hn::BitCast(d, hn::Or(hn::ShiftRight<kPackedCostShift>(partial_even),
+                                hn::AndNot(hn::Set(dw, uint16_t{0x00FF}),
+                                           hn::ShiftRight<kPackedCostShift - 8>(partial_odd))));
+      partial_even = hn::And(partial_even, mask);
+      partial_odd = hn::And(partial_odd, mask);
+    } else
+#endif
+    {
+      c = hn::LoadU(d, cost + k);
+    }
     VW acc0 = hn::Zero(dw), acc1 = hn::Zero(dw);
     for (int p = 0; p < kPaths; ++p) {
       const V same = hn::LoadU(d, prev[p] + k);
@@ -469,21 +495,30 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
       minima[p] = hn::Min(minima[p], l);
       Accumulate(d, dw, l, &acc0, &acc1);
     }
-    if (kAdd) {
+    if constexpr (kAdd) {
 #if HWY_TARGET != HWY_SCALAR
       if constexpr (sizeof(T) == 1) {
         // `partial` holds the even sums, then the odd sums of the chunk.
         VW lo, hi;
-        EvenOddToNatural(dw, hn::Add(acc0, hn::Load(dw, partial + k)),
-                         hn::Add(acc1, hn::Load(dw, partial + k + nw)), &lo, &hi);
+        EvenOddToNatural(dw, hn::Add(acc0, partial_even), hn::Add(acc1, partial_odd), &lo, &hi);
         hn::StoreU(lo, dw, total + k);
         hn::StoreU(hi, dw, total + k + nw);
       } else
 #endif
       {
-        hn::StoreU(hn::Add(acc0, hn::Load(dw, partial + k)), dw, total + k);
+        hn::StoreU(hn::Add(acc0, partial_even), dw, total + k);
       }
     } else {
+#if HWY_TARGET != HWY_SCALAR
+      if constexpr (kPackedCost) {
+        // Cost c of the even disparities (low bytes of the pairs) and of the odd ones (high
+        // bytes) into the top bits of the sums: the second sweep needs no cost computation.
+        const VW pairs = hn::BitCast(dw, c);
+        const VW top = hn::Set(dw, uint16_t{static_cast<uint16_t>(~kPackedSumMask)});
+        acc0 = hn::Or(acc0, hn::And(hn::ShiftLeft<kPackedCostShift>(pairs), top));
+        acc1 = hn::Or(acc1, hn::And(hn::ShiftLeft<kPackedCostShift - 8>(pairs), top));
+      }
+#endif
       hn::Stream(acc0, dw, partial + k);  // read by the other sweep much later: bypass the caches
       if (sizeof(T) == 1) hn::Stream(acc1, dw, partial + k + nw);
     }
@@ -499,7 +534,7 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
 // bottom, bottom-right, bottom-left.
 // Pixels ahead at which the second sweep prefetches the other sweep's partial sums.
 constexpr int kPrefetchPixels = 4;
-template <typename T, int kPaths, bool kAdd>
+template <typename T, int kPaths, bool kAdd, bool kPackedCost>
 void SweepSteps(const AggregationInput& in, int direction, int step_begin, int step_end,
                 const uint16_t* p2_table, SumVolume* sum, T* base, SweepScratch* scratch,
                 const RowDone* row_done) {
@@ -525,8 +560,11 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
     const int y = direction > 0 ? t : h - 1 - t;
     const int prev_y = y - direction;
     const int cur_parity = t & 1, prev_parity = 1 - cur_parity;
-    PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed,
-                   &scratch->bt_left, sizeof(T) == 1 ? &scratch->planes_reversed : nullptr, &ctx);
+    // The second sweep over a row reads packed costs: no census row to prepare.
+    if (!(kAdd && kPackedCost)) {
+      PrepareCostRow(cin, y, padded, &scratch->census_reversed, &scratch->bt_reversed,
+                     &scratch->bt_left, sizeof(T) == 1 ? &scratch->planes_reversed : nullptr, &ctx);
+    }
     const uint8_t* gray = cin.gray_left + static_cast<size_t>(y) * w;
     const uint8_t* gray_prev = t > 0 ? cin.gray_left + static_cast<size_t>(prev_y) * w : nullptr;
     uint16_t* partial_row = sum->Row(y);
@@ -538,7 +576,7 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
             partial_row + static_cast<size_t>(x + kPrefetchPixels * direction) * padded;
         for (int line = 0; line < padded; line += 32) hwy::Prefetch(ahead + line);
       }
-      PixelCost<T>(ctx, x, cost);
+      if (!(kAdd && kPackedCost)) PixelCost<T>(ctx, x, cost);
       PathStep<T> steps[kPaths];
       // Horizontal path from x - direction.
       {
@@ -574,8 +612,9 @@ void SweepSteps(const AggregationInput& in, int direction, int step_begin, int s
       }
       (void)minima;
       uint16_t* total = total_row + static_cast<size_t>(x) * padded;
-      AggregatePixel<T, kPaths, kAdd>(cost, steps, full_chunks_end, padded, tail_valid_first, p1,
-                                      partial_row + static_cast<size_t>(x) * padded, total);
+      AggregatePixel<T, kPaths, kAdd, kPackedCost>(
+          cost, steps, full_chunks_end, padded, tail_valid_first, p1,
+          partial_row + static_cast<size_t>(x) * padded, total);
       // Padding lanes of the final S hold 0xFFFF so that no winner-takes-all can pick them.
       if (kAdd && num != padded) std::fill(total + num, total + padded, uint16_t{0xFFFF});
     }
@@ -598,22 +637,27 @@ void SweepTyped(const AggregationInput& in, int direction, int step_begin, int s
   }
   T* base = reinterpret_cast<T*>(scratch->buffers.data());
   const bool eight = in.num_paths == 8;
-  if (add) {
-    if (eight) {
-      SweepSteps<T, 4, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
-                             row_done);
-    } else {
-      SweepSteps<T, 2, true>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
-                             row_done);
+  const auto run = [&](auto paths, auto add_tag, auto packed) {
+    SweepSteps<T, decltype(paths)::value, decltype(add_tag)::value, decltype(packed)::value>(
+        in, direction, step_begin, step_end, p2_table, sum, base, scratch, row_done);
+  };
+  const auto with_packing = [&](auto paths, auto add_tag) {
+    if constexpr (sizeof(T) == 1) {
+      if (UsesPackedCosts(in)) return run(paths, add_tag, std::true_type());
     }
+    run(paths, add_tag, std::false_type());
+  };
+  const auto with_add = [&](auto paths) {
+    if (add) {
+      with_packing(paths, std::true_type());
+    } else {
+      with_packing(paths, std::false_type());
+    }
+  };
+  if (eight) {
+    with_add(std::integral_constant<int, 4>());
   } else {
-    if (eight) {
-      SweepSteps<T, 4, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
-                              row_done);
-    } else {
-      SweepSteps<T, 2, false>(in, direction, step_begin, step_end, p2_table, sum, base, scratch,
-                              row_done);
-    }
+    with_add(std::integral_constant<int, 2>());
   }
 }
 

@@ -102,7 +102,8 @@ struct AggregationInput {
 // Partial sums of the sweep that reaches a row first: height rows of width pixels of
 // PaddedDisparities() uint16 lanes (the only full-size buffer of the matcher). With uint8 path
 // costs each vector's worth of disparities is stored as the sums of its even disparities, then of
-// its odd ones (an internal layout of AggregatePaths; the final rows handed out are in order).
+// its odd ones, with the matching costs in the top 6 bits when UsesPackedCosts (an internal layout
+// of AggregatePaths; the final rows handed out are in order).
 struct SumVolume {
   int width = 0;
   int height = 0;
@@ -119,6 +120,13 @@ struct SumVolume {
 // vector.
 inline bool UsesNarrowPathCosts(const AggregationInput& input) {
   return input.cost.bt_weight == 0 && MaxMatchingCost(input.cost) + input.p2 <= 254;
+}
+
+// With uint8 path costs and a census cost of at most 63, the first sweep over a row stores each
+// pixel's matching costs in the top 6 bits of its partial sums (which stay below 1024) and the
+// second sweep reads them instead of recomputing them.
+inline bool UsesPackedCosts(const AggregationInput& input) {
+  return UsesNarrowPathCosts(input) && MaxMatchingCost(input.cost) <= 63;
 }
 
 // Scratch of one sweep direction (reused between frames).
