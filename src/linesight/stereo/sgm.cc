@@ -10,6 +10,8 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/core/timer.h"
+#include <cstdio>
 #include "linesight/stereo/sgm_stages.h"
 
 namespace linesight {
@@ -178,6 +180,7 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   const int threads = EffectiveThreads(o.threads);
   Scratch& s = *scratch_;
 
+  Stopwatch sw_;
   // Stage 1: census transform of both images.
   const size_t pixels = static_cast<size_t>(w) * h;
   s.census_left.resize(pixels);
@@ -271,7 +274,9 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
       fixed[x] = why == SgmInvalid::kValid ? static_cast<int16_t>(value) : detail::kSgmInvalidFixed;
     }
   };
+  const double t_census = sw_.ElapsedMs();
   detail::AggregatePaths(input, std::min(threads, 2), &s.sum, &s.forward, &s.backward, finish_row);
+  const double t_agg = sw_.ElapsedMs();
 
   // Stage 5: speckle filter on the fixed-point map.
   if (o.speckle_window > 0) {
@@ -292,6 +297,7 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
     std::swap(s.fixed, s.filtered);
   }
 
+  const double t_speckle = sw_.ElapsedMs();
   // Stage 6: 3×3 median over valid neighbours.
   if (o.median) {
     s.filtered.create(h, w, CV_16SC1);
@@ -311,6 +317,7 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
                    : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
     }
   }
+  if (getenv("SGM_TIMES")) fprintf(stderr, "census %.1f agg %.1f speckle %.1f total %.1f\n", t_census, t_agg - t_census, t_speckle - t_agg, sw_.ElapsedMs());
   return result;
 }
 
