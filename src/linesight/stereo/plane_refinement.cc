@@ -105,12 +105,39 @@ bool WithinSlant(const DisparityPlane& plane, double max_slant) {
   return std::abs(plane.a) <= max_slant && std::abs(plane.b) <= max_slant;
 }
 
-int CountInliers(const std::vector<PlanePoint>& points, const std::vector<int>& sample,
-                 const DisparityPlane& plane, double threshold) {
+// The RANSAC scoring subsample as separate coordinate arrays: the count below is branch-free and
+// vectorises (it computes plane.At(x, y) - d exactly as the scalar form does).
+struct ScoringSample {
+  std::vector<double> x, y, d;
+  int Size() const { return static_cast<int>(x.size()); }
+};
+
+int CountInliers(const ScoringSample& sample, const DisparityPlane& plane, double threshold) {
+  const double* x = sample.x.data();
+  const double* y = sample.y.data();
+  const double* d = sample.d.data();
+  const int n = sample.Size();
   int count = 0;
-  for (int i : sample) {
+  for (int i = 0; i < n; ++i)
+    count += std::abs(plane.a * x[i] + plane.b * y[i] + plane.c - d[i]) <= threshold;
+  return count;
+}
+
+// MarkInliers and AccumulateNormalEquations over the marked points in one pass (the same sums in
+// the same order as the two passes).
+int MarkAndAccumulateInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
+                             double threshold, double ox, double oy, std::vector<uint8_t>* mask,
+                             PlaneNormalEquations* equations) {
+  mask->assign(points.size(), 0);
+  *equations = PlaneNormalEquations();
+  int count = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
     const PlanePoint& p = points[i];
-    count += std::abs(plane.At(p.x, p.y) - p.d) <= threshold;
+    if (std::abs(plane.At(p.x, p.y) - p.d) <= threshold) {
+      (*mask)[i] = 1;
+      ++count;
+      equations->Add(p.x - ox, p.y - oy, p.d);
+    }
   }
   return count;
 }
@@ -198,20 +225,27 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
   for (const PlanePoint& p : points) ox += p.x, oy += p.y;
   ox /= n, oy /= n;
 
-  // Hypotheses are scored on an even subsample of at most ransac_max_points pixels.
-  std::vector<int> sample;
+  // Hypotheses are scored on an even subsample of at most ransac_max_points pixels. Scratch is
+  // per thread: this runs once or twice for each of thousands of segments per frame.
+  thread_local ScoringSample sample;
+  thread_local std::vector<float> values;
   const int sample_size = std::min(n, options.ransac_max_points);
-  sample.reserve(sample_size);
+  sample.x.resize(sample_size);
+  sample.y.resize(sample_size);
+  sample.d.resize(sample_size);
   for (int i = 0; i < sample_size; ++i) {
-    sample.push_back(static_cast<int>(static_cast<int64_t>(i) * n / sample_size));
+    const PlanePoint& p = points[static_cast<size_t>(static_cast<int64_t>(i) * n / sample_size)];
+    sample.x[i] = p.x;
+    sample.y[i] = p.y;
+    sample.d[i] = p.d;
   }
 
   // The fronto-parallel median is a hypothesis that small or noisy segments often need.
-  std::vector<float> values(n);
+  values.resize(n);
   for (int i = 0; i < n; ++i) values[i] = points[i].d;
   std::nth_element(values.begin(), values.begin() + n / 2, values.end());
   DisparityPlane best{0, 0, values[n / 2]};
-  int best_score = CountInliers(points, sample, best, threshold);
+  int best_score = CountInliers(sample, best, threshold);
 
   SplitMix64 rng{seed};
   for (int it = 0; it < options.ransac_iterations; ++it) {
@@ -227,7 +261,7 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
     h.b = -ny / nz;
     h.c = p.d - h.a * p.x - h.b * p.y;
     if (!WithinSlant(h, options.max_slant)) continue;
-    const int score = CountInliers(points, sample, h, threshold);
+    const int score = CountInliers(sample, h, threshold);
     if (score > best_score) {
       best_score = score;
       best = h;
@@ -236,12 +270,13 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
 
   // Least squares on the inliers, re-selected after every refit.
   for (int it = 0; it < options.refit_iterations; ++it) {
-    double rms;
-    if (MarkInliers(points, best, threshold, &fit->inlier_mask, &rms) < 3) break;
+    PlaneNormalEquations equations;
+    if (MarkAndAccumulateInliers(points, best, threshold, ox, oy, &fit->inlier_mask, &equations) <
+        3) {
+      break;
+    }
     DisparityPlane refined;
-    if (!SolvePlane(AccumulateNormalEquations(points, &fit->inlier_mask, ox, oy), ox, oy,
-                    &refined) ||
-        !WithinSlant(refined, options.max_slant)) {
+    if (!SolvePlane(equations, ox, oy, &refined) || !WithinSlant(refined, options.max_slant)) {
       break;
     }
     best = refined;
