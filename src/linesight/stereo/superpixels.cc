@@ -67,6 +67,11 @@ void AssignBand(const cv::Mat& features, const std::vector<float>& centres, int 
           cy[i] = c[1];
           for (int ch = 0; ch < kChannels; ++ch) cf[i][ch] = c[2 + ch];
         }
+        if constexpr (kChannels == 1) {
+          AssignGreyBlock(features.ptr<uint8_t>(), features.step1(), width, ya, yb, xa, xb, cells,
+                          cx, cy, cf[0], spatial_weight, labels->ptr<int32_t>(), labels->step1());
+          continue;
+        }
         for (int y = ya; y < yb; ++y) {
           const uint8_t* f = features.ptr<uint8_t>(y);
           int32_t* out = labels->ptr<int32_t>(y);

@@ -48,5 +48,12 @@ void AssignPixelsToCentres(const cv::Mat& features, const std::vector<float>& ce
 // segments.
 int EnforceConnectivity(cv::Mat* labels, int min_size);
 
+// The grey-feature kernel of AssignPixelsToCentres (SIMD, superpixel_kernels.cc): labels of rows
+// [ya, yb) x columns [xa, xb) from four candidate centres (ids increasing; ties go to the smaller
+// id), with distance spatial_weight * (dx² + dy²) + (f - cf)².
+void AssignGreyBlock(const uint8_t* features, size_t feature_stride, int width, int ya, int yb,
+                     int xa, int xb, const int32_t* ids, const float* cx, const float* cy,
+                     const float* cf, float spatial_weight, int32_t* labels, size_t label_stride);
+
 }  // namespace detail
 }  // namespace linesight

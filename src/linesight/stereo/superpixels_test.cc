@@ -1,9 +1,11 @@
 #include "linesight/stereo/superpixels.h"
 
 #include <gtest/gtest.h>
+#include <hwy/tests/hwy_gtest.h>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <array>
 #include <queue>
 #include <set>
 
@@ -133,6 +135,88 @@ TEST(SegmentSuperpixels, IndependentOfThreadCount) {
   cv::setNumThreads(saved);
   EXPECT_EQ(n1, n2);
   EXPECT_EQ(cv::countNonZero(one != four), 0);
+}
+
+// Naive reference of AssignPixelsToCentres for grey features: every pixel against the centres of
+// its cell and of the three cells of its quadrant, nearest wins, ties to the smaller index.
+cv::Mat NaiveAssignGrey(const cv::Mat& features, const std::vector<float>& centres, int grid_x,
+                        int grid_y, double spatial_weight) {
+  const int width = features.cols, height = features.rows;
+  const auto start = [](int cell, int size, int cells) {
+    return static_cast<int>((static_cast<int64_t>(cell) * size + cells - 1) / cells);
+  };
+  const auto cell_of = [&](int v, int size, int cells) {
+    int c = 0;
+    while (start(c + 1, size, cells) <= v) ++c;
+    return c;
+  };
+  const float weight = static_cast<float>(spatial_weight);
+  cv::Mat labels(features.size(), CV_32SC1);
+  for (int y = 0; y < height; ++y) {
+    const int gy = cell_of(y, height, grid_y);
+    const int y_mid = (start(gy, height, grid_y) + start(gy + 1, height, grid_y)) / 2;
+    const int gy_other = y < y_mid ? gy - 1 : gy + 1;
+    for (int x = 0; x < width; ++x) {
+      const int gx = cell_of(x, width, grid_x);
+      const int x_mid = (start(gx, width, grid_x) + start(gx + 1, width, grid_x)) / 2;
+      const int gx_other = x < x_mid ? gx - 1 : gx + 1;
+      std::vector<int> candidates = {gy * grid_x + gx};
+      const bool col = gx_other >= 0 && gx_other < grid_x;
+      const bool row = gy_other >= 0 && gy_other < grid_y;
+      if (col) candidates.push_back(gy * grid_x + gx_other);
+      if (row) candidates.push_back(gy_other * grid_x + gx);
+      if (row && col) candidates.push_back(gy_other * grid_x + gx_other);
+      int best = -1;
+      float best_distance = 0;
+      for (int c : candidates) {
+        const float* centre = &centres[static_cast<size_t>(c) * 3];
+        const float dy = static_cast<float>(y) - centre[1];
+        const float dx = static_cast<float>(x) - centre[0];
+        const float dc = static_cast<float>(features.at<uint8_t>(y, x)) - centre[2];
+        float distance = weight * dy * dy;
+        distance = distance + weight * dx * dx;
+        distance += dc * dc;
+        if (best < 0 || distance < best_distance || (distance == best_distance && c < best)) {
+          best = c;
+          best_distance = distance;
+        }
+      }
+      labels.at<int32_t>(y, x) = best;
+    }
+  }
+  return labels;
+}
+
+class SuperpixelKernelTest : public hwy::TestWithParamTarget {};
+HWY_TARGET_INSTANTIATE_TEST_SUITE_P(SuperpixelKernelTest);
+
+TEST_P(SuperpixelKernelTest, GreyAssignmentEqualsNaiveReference) {
+  cv::RNG rng(5);
+  // Odd sizes, cells narrower than a vector, a single cell, a single row.
+  const std::vector<std::array<int, 4>> cases = {
+      {311, 239, 24, 18}, {37, 9, 3, 1}, {5, 5, 1, 1}, {70, 1, 7, 1}, {129, 65, 5, 3}};
+  for (const auto& [width, height, grid_x, grid_y] : cases) {
+    cv::Mat features(height, width, CV_8UC1);
+    rng.fill(features, cv::RNG::UNIFORM, 0, 256);
+    // Centres near their cells, and some exactly on a pixel value / position (ties).
+    std::vector<float> centres(static_cast<size_t>(grid_x) * grid_y * 3);
+    for (int gy = 0; gy < grid_y; ++gy) {
+      for (int gx = 0; gx < grid_x; ++gx) {
+        float* c = &centres[static_cast<size_t>(gy * grid_x + gx) * 3];
+        const float jitter = rng.uniform(0, 4) == 0 ? 0.0f : rng.uniform(-3.0f, 3.0f);
+        c[0] = (gx + 0.5f) * width / grid_x + jitter;
+        c[1] = (gy + 0.5f) * height / grid_y - jitter;
+        c[2] = rng.uniform(0, 3) == 0 ? 128.0f : rng.uniform(0.0f, 255.0f);
+      }
+    }
+    for (const double weight : {0.0, 0.59, 4.0}) {
+      cv::Mat labels;
+      detail::AssignPixelsToCentres(features, centres, grid_x, grid_y, weight, &labels);
+      const cv::Mat expected = NaiveAssignGrey(features, centres, grid_x, grid_y, weight);
+      ASSERT_EQ(cv::countNonZero(labels != expected), 0)
+          << width << "x" << height << " grid " << grid_x << "x" << grid_y << " weight " << weight;
+    }
+  }
 }
 
 // Naive reference of EnforceConnectivity: flood fill from each unlabelled pixel in raster order.
