@@ -10,8 +10,6 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
-#include "linesight/core/timer.h"
-#include <cstdio>
 #include "linesight/stereo/sgm_stages.h"
 
 namespace linesight {
@@ -143,7 +141,7 @@ struct SgmMatcher::Scratch {
   detail::AlignedVector<uint64_t> census_left, census_right;
   detail::SumVolume sum;
   detail::SweepScratch forward, backward;
-  cv::Mat best, best_cost, second_cost, right_best;  // per pixel, from the WTA
+  cv::Mat best, right_best;  // per pixel, from the WTA
   cv::Mat fixed, filtered, speckle_buffer;
 };
 
@@ -180,7 +178,6 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   const int threads = EffectiveThreads(o.threads);
   Scratch& s = *scratch_;
 
-  Stopwatch sw_;
   // Stage 1: census transform of both images.
   const size_t pixels = static_cast<size_t>(w) * h;
   s.census_left.resize(pixels);
@@ -217,9 +214,8 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   result.right_disparity.create(h, w, CV_32FC1);
   result.invalid_reason.create(h, w, CV_8UC1);
   result.min_cost.create(h, w, CV_16UC1);
-  result.confidence.create(h, w, CV_32FC1);
   s.best.create(h, w, CV_16SC1);
-  s.second_cost.create(h, w, CV_16UC1);
+  result.second_cost.create(h, w, CV_16UC1);
   s.right_best.create(h, w, CV_16SC1);
   s.fixed.create(h, w, CV_16SC1);
 
@@ -231,13 +227,12 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
     detail::WtaRow row;
     row.best = s.best.ptr<int16_t>(y);
     row.best_cost = result.min_cost.ptr<uint16_t>(y);
-    row.second_cost = s.second_cost.ptr<uint16_t>(y);
+    row.second_cost = result.second_cost.ptr<uint16_t>(y);
     row.right_best = s.right_best.ptr<int16_t>(y);
     detail::WinnerTakesAllRow(sum_row, w, num, dmin, row, right_scratch.data());
     float* raw = result.raw_disparity.ptr<float>(y);
     float* right_out = result.right_disparity.ptr<float>(y);
     uint8_t* reason = result.invalid_reason.ptr<uint8_t>(y);
-    float* confidence = result.confidence.ptr<float>(y);
     int16_t* fixed = s.fixed.ptr<int16_t>(y);
     for (int x = 0; x < w; ++x) {
       right_out[x] =
@@ -247,7 +242,6 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
       if (x - dmin < 0 || x - dmin - (num - 1) >= w) {
         raw[x] = kInvalidDisparity;
         reason[x] = static_cast<uint8_t>(SgmInvalid::kNoCandidate);
-        confidence[x] = 0;
         fixed[x] = detail::kSgmInvalidFixed;
         continue;
       }
@@ -259,9 +253,6 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
         offset = detail::SubpixelOffset(subpixel, costs[best - 1], best_cost, costs[best + 1]);
       const int value = (dmin + best) * kSgmSubpixelScale + offset;
       raw[x] = static_cast<float>(value) / kSgmSubpixelScale;
-      confidence[x] = second == 0xFFFF
-                          ? 1.0f
-                          : (second > 0 ? 1.0f - static_cast<float>(best_cost) / second : 0.0f);
       SgmInvalid why = SgmInvalid::kValid;
       if (static_cast<int64_t>(second) * (100 - o.uniqueness_ratio) <
           static_cast<int64_t>(best_cost) * 100) {
@@ -274,9 +265,7 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
       fixed[x] = why == SgmInvalid::kValid ? static_cast<int16_t>(value) : detail::kSgmInvalidFixed;
     }
   };
-  const double t_census = sw_.ElapsedMs();
   detail::AggregatePaths(input, std::min(threads, 2), &s.sum, &s.forward, &s.backward, finish_row);
-  const double t_agg = sw_.ElapsedMs();
 
   // Stage 5: speckle filter on the fixed-point map.
   if (o.speckle_window > 0) {
@@ -297,7 +286,6 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
     std::swap(s.fixed, s.filtered);
   }
 
-  const double t_speckle = sw_.ElapsedMs();
   // Stage 6: 3×3 median over valid neighbours.
   if (o.median) {
     s.filtered.create(h, w, CV_16SC1);
@@ -317,8 +305,28 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
                    : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
     }
   }
-  if (getenv("SGM_TIMES")) fprintf(stderr, "census %.1f agg %.1f speckle %.1f total %.1f\n", t_census, t_agg - t_census, t_speckle - t_agg, sw_.ElapsedMs());
   return result;
+}
+
+cv::Mat SgmConfidence(const SgmResult& result) {
+  LS_CHECK(result.min_cost.type() == CV_16UC1 && result.second_cost.type() == CV_16UC1 &&
+           result.invalid_reason.type() == CV_8UC1 &&
+           result.min_cost.size() == result.second_cost.size() &&
+           result.min_cost.size() == result.invalid_reason.size());
+  cv::Mat confidence(result.min_cost.size(), CV_32FC1);
+  for (int y = 0; y < confidence.rows; ++y) {
+    const uint16_t* best = result.min_cost.ptr<uint16_t>(y);
+    const uint16_t* second = result.second_cost.ptr<uint16_t>(y);
+    const uint8_t* reason = result.invalid_reason.ptr<uint8_t>(y);
+    float* out = confidence.ptr<float>(y);
+    for (int x = 0; x < confidence.cols; ++x) {
+      out[x] = reason[x] == static_cast<uint8_t>(SgmInvalid::kNoCandidate) ? 0.0f
+               : second[x] == 0xFFFF
+                   ? 1.0f
+                   : (second[x] > 0 ? 1.0f - static_cast<float>(best[x]) / second[x] : 0.0f);
+    }
+  }
+  return confidence;
 }
 
 SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params,

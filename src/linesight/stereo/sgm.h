@@ -98,9 +98,14 @@ struct SgmResult {
       right_disparity;  // CV_32FC1, integer WTA of the right view from the same volume (+inf: none)
   cv::Mat invalid_reason;  // CV_8UC1, SgmInvalid per pixel of `disparity`
   cv::Mat min_cost;        // CV_16UC1, aggregated cost of the winner
-  // CV_32FC1 in [0, 1]: 1 - best / (best cost more than 1 px from the winner); 0 when ambiguous.
-  cv::Mat confidence;
+  // CV_16UC1, smallest aggregated cost more than 1 px from the winner (0xFFFF: none).
+  cv::Mat second_cost;
 };
+
+// Per-pixel confidence of the winner, CV_32FC1 in [0, 1]: 1 - min_cost / second_cost (1 without a
+// second candidate, 0 when both are 0 and where no disparity was a candidate). Computed on demand:
+// nothing in the pipeline needs it.
+cv::Mat SgmConfidence(const SgmResult& result);
 
 // The `sgm` method. Not thread-safe (scratch buffers are reused); use one matcher per thread.
 class SgmMatcher final : public StereoMatcher {

@@ -226,6 +226,32 @@ TEST(SgmAccuracy, SlantedPlaneWithKnownDisparity) {
   }
 }
 
+TEST(SgmConfidence, FromWinnerAndSecondCosts) {
+  SgmResult r;
+  r.min_cost = (cv::Mat_<uint16_t>(1, 5) << 10, 0, 30, 7, 5);
+  r.second_cost = (cv::Mat_<uint16_t>(1, 5) << 40, 0, 0xFFFF, 7, 50);
+  r.invalid_reason =
+      (cv::Mat_<uint8_t>(1, 5) << 0, 0, 0, 2, static_cast<uint8_t>(SgmInvalid::kNoCandidate));
+  const cv::Mat c = SgmConfidence(r);
+  ASSERT_EQ(c.type(), CV_32FC1);
+  EXPECT_FLOAT_EQ(c.at<float>(0, 0), 0.75f);  // 1 - 10 / 40
+  EXPECT_FLOAT_EQ(c.at<float>(0, 1), 0.0f);   // both zero: ambiguous
+  EXPECT_FLOAT_EQ(c.at<float>(0, 2), 1.0f);   // no second candidate
+  EXPECT_FLOAT_EQ(c.at<float>(0, 3), 0.0f);   // a tie
+  EXPECT_FLOAT_EQ(c.at<float>(0, 4), 0.0f);   // no candidate at all
+  // A real map: confidence in [0, 1], and the winners of a textured plane are mostly clear.
+  const SyntheticPair pair = MakeSlantedPlane(160, 120, 8.0, 0.02, 0.0, 5);
+  SgmOptions o;
+  o.num_disparities = 32;
+  SgmMatcher matcher(o);
+  const cv::Mat confidence = SgmConfidence(matcher.ComputeDetailed(pair.left, pair.right));
+  double lo, hi;
+  cv::minMaxLoc(confidence, &lo, &hi);
+  EXPECT_GE(lo, 0.0);
+  EXPECT_LE(hi, 1.0);
+  EXPECT_GT(cv::mean(confidence)[0], 0.2);
+}
+
 TEST(SgmAccuracy, NegativeMinDisparityAndOddRange) {
   // True disparity 2.5 .. 5.8 searched with min_disparity -4 and 13 disparities (not a multiple of
   // 16).
