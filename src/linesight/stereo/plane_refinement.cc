@@ -105,22 +105,21 @@ bool WithinSlant(const DisparityPlane& plane, double max_slant) {
   return std::abs(plane.a) <= max_slant && std::abs(plane.b) <= max_slant;
 }
 
-// The RANSAC scoring subsample as separate coordinate arrays: the count below is branch-free and
-// vectorises (it computes plane.At(x, y) - d exactly as the scalar form does).
+// The RANSAC scoring subsample as separate coordinate arrays, padded for CountPlaneInliers.
 struct ScoringSample {
   std::vector<double> x, y, d;
-  int Size() const { return static_cast<int>(x.size()); }
+  void Resize(int n) {
+    const size_t padded =
+        (static_cast<size_t>(n) + kPlanePointPadding - 1) / kPlanePointPadding * kPlanePointPadding;
+    x.assign(padded, 0.0);
+    y.assign(padded, 0.0);
+    d.assign(padded, std::numeric_limits<double>::quiet_NaN());
+  }
 };
 
 int CountInliers(const ScoringSample& sample, const DisparityPlane& plane, double threshold) {
-  const double* x = sample.x.data();
-  const double* y = sample.y.data();
-  const double* d = sample.d.data();
-  const int n = sample.Size();
-  int count = 0;
-  for (int i = 0; i < n; ++i)
-    count += std::abs(plane.a * x[i] + plane.b * y[i] + plane.c - d[i]) <= threshold;
-  return count;
+  return CountPlaneInliers(sample.x.data(), sample.y.data(), sample.d.data(), sample.x.size(),
+                           plane, threshold);
 }
 
 // MarkInliers and AccumulateNormalEquations over the marked points in one pass (the same sums in
@@ -230,9 +229,7 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
   thread_local ScoringSample sample;
   thread_local std::vector<float> values;
   const int sample_size = std::min(n, options.ransac_max_points);
-  sample.x.resize(sample_size);
-  sample.y.resize(sample_size);
-  sample.d.resize(sample_size);
+  sample.Resize(sample_size);
   for (int i = 0; i < sample_size; ++i) {
     const PlanePoint& p = points[static_cast<size_t>(static_cast<int64_t>(i) * n / sample_size)];
     sample.x[i] = p.x;

@@ -159,6 +159,13 @@ PlaneNormalEquations AccumulateNormalEquations(const std::vector<PlanePoint>& po
 // determine a plane (fewer than 3 or collinear).
 bool SolvePlane(const PlaneNormalEquations& equations, double ox, double oy, DisparityPlane* plane);
 
+// Number of points i < padded with |plane.At(x[i], y[i]) - d[i]| <= threshold (SIMD,
+// plane_kernels.cc). `padded` is a multiple of kPlanePointPadding; padding points carry d = NaN,
+// which never counts.
+inline constexpr size_t kPlanePointPadding = 16;
+int CountPlaneInliers(const double* x, const double* y, const double* d, size_t padded,
+                      const DisparityPlane& plane, double threshold);
+
 struct RobustPlaneFit {
   DisparityPlane plane;
   int inliers = 0;

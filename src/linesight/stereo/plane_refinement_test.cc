@@ -3,7 +3,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include <limits>
+
 #include <gtest/gtest.h>
+#include <hwy/tests/hwy_gtest.h>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -154,6 +157,34 @@ TEST(SolvePlane, RejectsCollinearAndTooFewPoints) {
   line.resize(2);
   EXPECT_FALSE(
       detail::SolvePlane(detail::AccumulateNormalEquations(line, nullptr, 0, 0), 0, 0, &plane));
+}
+
+class PlaneKernelTest : public hwy::TestWithParamTarget {};
+HWY_TARGET_INSTANTIATE_TEST_SUITE_P(PlaneKernelTest);
+
+TEST_P(PlaneKernelTest, InlierCountEqualsScalarForm) {
+  cv::RNG rng(11);
+  for (const int n : {0, 1, 7, 16, 37, 48, 161}) {
+    const size_t padded = (static_cast<size_t>(n) + detail::kPlanePointPadding - 1) /
+                          detail::kPlanePointPadding * detail::kPlanePointPadding;
+    std::vector<double> x(padded, 0.0), y(padded, 0.0),
+        d(padded, std::numeric_limits<double>::quiet_NaN());
+    const detail::DisparityPlane plane{0.031, -0.017, 21.5};
+    for (int i = 0; i < n; ++i) {
+      x[i] = rng.uniform(0, 752);
+      y[i] = rng.uniform(0, 480);
+      // Residuals around the threshold, some exactly on it (integer plane values).
+      d[i] = i % 5 == 0 ? 21.5 + 0.031 * x[i] - 0.017 * y[i] - 0.5
+                        : plane.At(x[i], y[i]) + rng.uniform(-1.5, 1.5);
+    }
+    for (const double threshold : {0.25, 0.5, 1.0}) {
+      int expected = 0;
+      for (int i = 0; i < n; ++i) expected += std::abs(plane.At(x[i], y[i]) - d[i]) <= threshold;
+      EXPECT_EQ(detail::CountPlaneInliers(x.data(), y.data(), d.data(), padded, plane, threshold),
+                expected)
+          << "n " << n << " threshold " << threshold;
+    }
+  }
 }
 
 TEST(FitPlaneRobust, IgnoresThirtyPercentOutliers) {
