@@ -29,7 +29,10 @@ int RunBench(int argc, char** argv) {
                  "are skipped")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--runs", options.runs, "timed runs per method and size (median reported)")
+  app.add_option("--runs", options.runs, "timed runs per method, size and round")
+      ->capture_default_str();
+  app.add_option("--rounds", options.rounds,
+                 "rounds over the method list (methods interleaved; medians pooled)")
       ->capture_default_str();
   app.add_option("--warmup", options.warmup, "untimed warm-up runs (discarded)")
       ->capture_default_str();

@@ -87,6 +87,12 @@ bool IsKnownMethod(const std::string& method) {
   return std::find(names.begin(), names.end(), method) != names.end();
 }
 
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
 // Runs in the forked child: returns the measurements as JSON.
 nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& method,
                               const BenchSize& size) {
@@ -113,21 +119,15 @@ nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& me
   const double density =
       100.0 * cv::countNonZero((disparity == disparity) & (disparity < kInvalidDisparity)) /
       static_cast<double>(disparity.total());
-  std::sort(ms.begin(), ms.end());
-  const double median =
-      ms.size() % 2 == 1 ? ms[ms.size() / 2] : 0.5 * (ms[ms.size() / 2 - 1] + ms[ms.size() / 2]);
-  return {{"median_ms", median},
-          {"min_ms", ms.front()},
-          {"peak_kb", ProcStatusKb("VmHWM")},
-          {"start_kb", start_kb},
-          {"density", density}};
+  return {
+      {"ms", ms}, {"peak_kb", ProcStatusKb("VmHWM")}, {"start_kb", start_kb}, {"density", density}};
 }
 
-BenchRow MeasureForked(const BenchOptions& options, const std::string& method,
-                       const BenchSize& size) {
-  BenchRow row;
-  row.method = method;
-  row.size = size;
+// One round of one method in a forked child: its run times (ms) into *ms, memory and density into
+// *row. Returns false (row skipped with the reason) if the child failed.
+bool MeasureForked(const BenchOptions& options, const std::string& method, const BenchSize& size,
+                   BenchRow* out, std::vector<double>* ms) {
+  BenchRow& row = *out;
   int fds[2];
   if (pipe(fds) != 0)
     throw std::runtime_error(fmt::format("bench: pipe failed: {}", std::strerror(errno)));
@@ -163,22 +163,21 @@ BenchRow MeasureForked(const BenchOptions& options, const std::string& method,
   if (text.empty()) {
     row.skipped = true;
     row.note = fmt::format("child process died (status {})", status);
-    return row;
+    return false;
   }
   const nlohmann::json j = nlohmann::json::parse(text);
   if (j.contains("error")) {
     row.skipped = true;
     row.note = j["error"].get<std::string>();
-    return row;
+    return false;
   }
-  row.median_ms = j["median_ms"];
-  row.min_ms = j["min_ms"];
-  row.fps = 1000.0 / row.median_ms;
-  row.mde_per_s = MdePerSecond(size.width, size.height, size.num_disparities, row.median_ms);
-  row.peak_rss_mb = j["peak_kb"].get<double>() / 1024.0;
-  row.peak_added_mb = (j["peak_kb"].get<double>() - j["start_kb"].get<double>()) / 1024.0;
+  *ms = j["ms"].get<std::vector<double>>();
+  // Memory: the largest of the rounds (each child measures its own).
+  row.peak_rss_mb = std::max(row.peak_rss_mb, j["peak_kb"].get<double>() / 1024.0);
+  row.peak_added_mb = std::max(row.peak_added_mb,
+                               (j["peak_kb"].get<double>() - j["start_kb"].get<double>()) / 1024.0);
   row.density = j["density"];
-  return row;
+  return true;
 }
 
 }  // namespace
@@ -204,6 +203,7 @@ void BenchOptions::Check() const {
   CheckOption(!sizes.empty(), "BenchOptions.sizes", sizes.size(), "must not be empty");
   CheckOption(!methods.empty(), "BenchOptions.methods", methods.size(), "must not be empty");
   CheckOption(runs >= 1, "BenchOptions.runs", runs, "must be >= 1");
+  CheckOption(rounds >= 1, "BenchOptions.rounds", rounds, "must be >= 1");
   CheckOption(warmup >= 0, "BenchOptions.warmup", warmup, "must be >= 0");
   CheckOption(threads >= 0, "BenchOptions.threads", threads, "must be >= 0 (0 = all cores)");
   CheckOption(left.empty() == right.empty(), "BenchOptions.right", right.empty() ? "empty" : "set",
@@ -229,28 +229,51 @@ BenchReport RunThroughputBench(const BenchOptions& options,
                                                     options.left.cols, options.left.rows);
   report.runs = options.runs;
   report.warmup = options.warmup;
+  report.rounds = options.rounds;
   for (const BenchSize& size : options.sizes) {
-    for (const std::string& method : options.methods) {
-      BenchRow row;
-      if (!IsKnownMethod(method)) {
-        row.method = method;
-        row.size = size;
-        row.skipped = true;
-        row.note = "not registered in the matcher factory";
-      } else {
-        row = MeasureForked(options, method, size);
+    std::vector<BenchRow> rows(options.methods.size());
+    std::vector<std::vector<double>> samples(options.methods.size());
+    for (size_t m = 0; m < options.methods.size(); ++m) {
+      rows[m].method = options.methods[m];
+      rows[m].size = size;
+      if (!IsKnownMethod(options.methods[m])) {
+        rows[m].skipped = true;
+        rows[m].note = "not registered in the matcher factory";
       }
+    }
+    // Round-robin: every round measures each method once, in the same order.
+    for (int round = 0; round < options.rounds; ++round) {
+      for (size_t m = 0; m < options.methods.size(); ++m) {
+        if (rows[m].skipped) continue;
+        std::vector<double> ms;
+        if (!MeasureForked(options, options.methods[m], size, &rows[m], &ms)) continue;
+        samples[m].insert(samples[m].end(), ms.begin(), ms.end());
+        rows[m].round_median_ms.push_back(Median(ms));
+      }
+    }
+    for (size_t m = 0; m < rows.size(); ++m) {
+      BenchRow& row = rows[m];
+      if (row.skipped) continue;
+      row.median_ms = Median(samples[m]);
+      row.min_ms = *std::min_element(samples[m].begin(), samples[m].end());
+      row.fps = 1000.0 / row.median_ms;
+      row.mde_per_s = MdePerSecond(size.width, size.height, size.num_disparities, row.median_ms);
+    }
+    const auto base = std::find_if(rows.begin(), rows.end(), [](const BenchRow& row) {
+      return row.method == "sgbm-3way" && !row.skipped;
+    });
+    for (BenchRow& row : rows) {
+      if (base == rows.end() || row.skipped) continue;
+      row.ratio_to_3way = base->median_ms / row.median_ms;  // MDE/s ratio at equal W·H·D
+      for (size_t r = 0; r < row.round_median_ms.size() && r < base->round_median_ms.size(); ++r) {
+        const double ratio = base->round_median_ms[r] / row.round_median_ms[r];
+        row.ratio_low = r == 0 ? ratio : std::min(row.ratio_low, ratio);
+        row.ratio_high = r == 0 ? ratio : std::max(row.ratio_high, ratio);
+      }
+    }
+    for (const BenchRow& row : rows) {
       report.rows.push_back(row);
       if (progress) progress(row);
-    }
-  }
-  for (BenchRow& row : report.rows) {
-    for (const BenchRow& base : report.rows) {
-      if (base.method == "sgbm-3way" && !base.skipped && base.size.width == row.size.width &&
-          base.size.height == row.size.height &&
-          base.size.num_disparities == row.size.num_disparities && !row.skipped) {
-        row.ratio_to_3way = row.mde_per_s / base.mde_per_s;
-      }
     }
   }
   return report;
@@ -263,9 +286,10 @@ std::string BenchMarkdown(const BenchReport& r) {
       "OpenCV {}\n",
       r.cpu, r.hardware_threads, r.threads, r.simd_target, r.opencv_version);
   out << fmt::format(
-      "input: {}; median of {} runs after {} warm-up run(s) discarded; peak = VmHWM of a "
-      "forked child per row\n\n",
-      r.input, r.runs, r.warmup);
+      "input: {}; median of {} rounds x {} runs (methods interleaved round by round, each run "
+      "after {} warm-up run(s) discarded); vs SGBM_3WAY: ratio of the medians (range over the "
+      "rounds); peak = largest VmHWM of a forked child per round\n\n",
+      r.input, r.rounds, r.runs, r.warmup);
   out << "| method | size | disparities | ms | fps | MDE/s | peak RSS (MiB) | added (MiB) | "
          "density % | vs "
          "SGBM_3WAY |\n";
@@ -281,7 +305,11 @@ std::string BenchMarkdown(const BenchReport& r) {
         "| {} | {} | {} | {:.1f} | {:.1f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} | {} |\n", row.method,
         size, row.size.num_disparities, row.median_ms, row.fps, row.mde_per_s, row.peak_rss_mb,
         row.peak_added_mb, row.density,
-        row.ratio_to_3way > 0 ? fmt::format("{:.2f}x", row.ratio_to_3way) : "-");
+        row.ratio_to_3way > 0 ? (row.method == "sgbm-3way" || r.rounds < 2
+                                     ? fmt::format("{:.2f}x", row.ratio_to_3way)
+                                     : fmt::format("{:.2f}x ({:.2f}-{:.2f})", row.ratio_to_3way,
+                                                   row.ratio_low, row.ratio_high))
+                              : "-");
   }
   return out.str();
 }
@@ -304,7 +332,10 @@ nlohmann::json BenchJson(const BenchReport& r) {
                 {"peak_rss_mib", row.peak_rss_mb},
                 {"peak_added_mib", row.peak_added_mb},
                 {"density_percent", row.density},
-                {"ratio_to_sgbm_3way", row.ratio_to_3way}});
+                {"ratio_to_sgbm_3way", row.ratio_to_3way},
+                {"ratio_to_sgbm_3way_low", row.ratio_low},
+                {"ratio_to_sgbm_3way_high", row.ratio_high},
+                {"round_median_ms", row.round_median_ms}});
     }
     rows.push_back(j);
   }
@@ -316,6 +347,7 @@ nlohmann::json BenchJson(const BenchReport& r) {
           {"input", r.input},
           {"runs", r.runs},
           {"warmup", r.warmup},
+          {"rounds", r.rounds},
           {"rows", rows}};
 }
 

@@ -29,7 +29,11 @@ struct BenchOptions {
   // Methods: any CreateMatcher name, plus "sgbm-3way" and "sgbm-hh" (OpenCV StereoSGBM in that
   // mode). A method the factory does not know (e.g. isgm before it exists) is reported as skipped.
   std::vector<std::string> methods = {"sgm", "isgm", "sgbm-3way", "sgbm-hh"};
-  int runs = 7;     // timed runs per (method, size); the median is reported
+  int runs = 7;  // timed runs per (method, size) and round
+  // Rounds over the method list per size (method A, B, C, A, B, C, ...): load drift on a shared
+  // machine then hits every method alike. The median is over all rounds' runs; the ratio to
+  // SGBM_3WAY is also reported per round (its range).
+  int rounds = 3;
   int warmup = 1;   // untimed runs before them (discarded)
   int threads = 0;  // worker threads for every method; 0 = all hardware threads
   // Optional input pair, resized to each size; empty = seeded synthetic textured pair.
@@ -52,6 +56,8 @@ struct BenchRow {
       0;  // VmHWM minus the RSS the child started with (MiB): what the method allocated
   double density = 0;        // % of pixels with an estimate in the last run
   double ratio_to_3way = 0;  // MDE/s relative to sgbm-3way at the same size (0 if not measured)
+  double ratio_low = 0, ratio_high = 0;  // smallest and largest per-round ratio
+  std::vector<double> round_median_ms;   // median of each round's runs
 };
 
 struct BenchReport {
@@ -61,7 +67,7 @@ struct BenchReport {
   std::string simd_target;  // Highway target of the sgm kernels
   std::string opencv_version;
   std::string input;  // "synthetic" or the input size
-  int runs = 0, warmup = 0;
+  int runs = 0, warmup = 0, rounds = 0;
   std::vector<BenchRow> rows;
 };
 

@@ -1,0 +1,54 @@
+#include "linesight/stereo/throughput_bench.h"
+
+#include <gtest/gtest.h>
+
+#include "linesight/core/error.h"
+
+namespace linesight {
+namespace {
+
+TEST(ThroughputBench, InterleavedRoundsPoolTheirRuns) {
+  BenchOptions options;
+  options.sizes = {{96, 64, 21}};
+  options.methods = {"sgm", "sgbm-3way", "no-such-method"};
+  options.runs = 2;
+  options.warmup = 0;
+  options.rounds = 3;
+  options.threads = 1;
+  std::vector<std::string> reported;
+  const BenchReport report =
+      RunThroughputBench(options, [&](const BenchRow& row) { reported.push_back(row.method); });
+  ASSERT_EQ(report.rows.size(), 3u);
+  EXPECT_EQ(reported, (std::vector<std::string>{"sgm", "sgbm-3way", "no-such-method"}));
+  EXPECT_EQ(report.rounds, 3);
+  for (int m = 0; m < 2; ++m) {
+    const BenchRow& row = report.rows[m];
+    ASSERT_FALSE(row.skipped) << row.method << ": " << row.note;
+    EXPECT_EQ(row.round_median_ms.size(), 3u) << row.method;
+    EXPECT_GT(row.median_ms, 0) << row.method;
+    EXPECT_LE(row.min_ms, row.median_ms) << row.method;
+    EXPECT_NEAR(row.mde_per_s, 96.0 * 64 * 21 / row.median_ms / 1000.0, 1e-9) << row.method;
+    EXPECT_GT(row.peak_rss_mb, 0) << row.method;
+    EXPECT_GT(row.density, 0) << row.method;
+  }
+  const BenchRow& sgm = report.rows[0];
+  const BenchRow& base = report.rows[1];
+  EXPECT_DOUBLE_EQ(base.ratio_to_3way, 1.0);
+  EXPECT_DOUBLE_EQ(sgm.ratio_to_3way, base.median_ms / sgm.median_ms);
+  EXPECT_LE(sgm.ratio_low, sgm.ratio_high);
+  EXPECT_GT(sgm.ratio_low, 0);
+  EXPECT_TRUE(report.rows[2].skipped);
+  EXPECT_NE(report.rows[2].note.find("not registered"), std::string::npos);
+  const std::string table = BenchMarkdown(report);
+  EXPECT_NE(table.find("3 rounds x 2 runs"), std::string::npos) << table;
+  EXPECT_NE(BenchJson(report)["rows"][0]["round_median_ms"].size(), 0u);
+}
+
+TEST(ThroughputBench, RejectsZeroRounds) {
+  BenchOptions options;
+  options.rounds = 0;
+  EXPECT_THROW(options.Check(), OptionError);
+}
+
+}  // namespace
+}  // namespace linesight
