@@ -122,38 +122,43 @@ int CountInliers(const ScoringSample& sample, const DisparityPlane& plane, doubl
                            plane, threshold);
 }
 
-// MarkInliers and AccumulateNormalEquations over the marked points in one pass (the same sums in
-// the same order as the two passes).
+// MarkInliers and AccumulateNormalEquations over the marked points in one pass, branch-free (the
+// inlier test is unpredictable on noisy segments): every point adds its terms times 1 or 0, which
+// gives the same sums in the same order as adding the inliers only.
 int MarkAndAccumulateInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
                              double threshold, double ox, double oy, std::vector<uint8_t>* mask,
                              PlaneNormalEquations* equations) {
-  mask->assign(points.size(), 0);
-  *equations = PlaneNormalEquations();
+  mask->resize(points.size());
+  uint8_t* marks = mask->data();
+  PlaneNormalEquations e;
   int count = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const PlanePoint& p = points[i];
-    if (std::abs(plane.At(p.x, p.y) - p.d) <= threshold) {
-      (*mask)[i] = 1;
-      ++count;
-      equations->Add(p.x - ox, p.y - oy, p.d);
-    }
+    const bool inlier = std::abs(plane.At(p.x, p.y) - p.d) <= threshold;
+    marks[i] = inlier;
+    count += inlier;
+    const double w = inlier ? 1.0 : 0.0;
+    const double x = p.x - ox, y = p.y - oy, d = p.d;
+    e.sxx += w * (x * x), e.sxy += w * (x * y), e.syy += w * (y * y);
+    e.sx += w * x, e.sy += w * y, e.n += w;
+    e.sxd += w * (x * d), e.syd += w * (y * d), e.sd += w * d;
   }
+  *equations = e;
   return count;
 }
 
-// Marks the inliers of `plane`; returns their count and writes their residual RMS.
 int MarkInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
                 double threshold, std::vector<uint8_t>* mask, double* rms) {
-  mask->assign(points.size(), 0);
+  mask->resize(points.size());
+  uint8_t* marks = mask->data();
   int count = 0;
   double squares = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
+  for (size_t i = 0; i < points.size(); ++i) {  // branch-free, as MarkAndAccumulateInliers
     const double r = plane.At(points[i].x, points[i].y) - points[i].d;
-    if (std::abs(r) <= threshold) {
-      (*mask)[i] = 1;
-      ++count;
-      squares += r * r;
-    }
+    const bool inlier = std::abs(r) <= threshold;
+    marks[i] = inlier;
+    count += inlier;
+    squares += (inlier ? 1.0 : 0.0) * (r * r);
   }
   *rms = count > 0 ? std::sqrt(squares / count) : 0.0;
   return count;
