@@ -179,10 +179,17 @@ SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments) {
   }
   for (int s = 0; s < num_segments; ++s) index.offsets[s + 1] += index.offsets[s];
   index.pixels.resize(labels.total());
+  index.x.resize(labels.total());
+  index.y.resize(labels.total());
   std::vector<int32_t> cursor(index.offsets.begin(), index.offsets.end() - 1);
   for (int y = 0; y < labels.rows; ++y) {
     const int32_t* l = labels.ptr<int32_t>(y);
-    for (int x = 0; x < labels.cols; ++x) index.pixels[cursor[l[x]]++] = y * labels.cols + x;
+    for (int x = 0; x < labels.cols; ++x) {
+      const int32_t at = cursor[l[x]]++;
+      index.pixels[at] = y * labels.cols + x;
+      index.x[at] = x;
+      index.y[at] = y;
+    }
   }
   return index;
 }
@@ -294,11 +301,10 @@ void CollectValidPoints(const cv::Mat& disparity, const SegmentIndex& index, int
                         std::vector<PlanePoint>* points) {
   points->clear();
   const float* d = disparity.ptr<float>();
-  const int width = disparity.cols;
   for (int i = index.offsets[segment]; i < index.offsets[segment + 1]; ++i) {
     const int p = index.pixels[i];
     if (IsValidDisparity(d[p])) {
-      points->push_back({static_cast<float>(p % width), static_cast<float>(p / width), d[p]});
+      points->push_back({static_cast<float>(index.x[i]), static_cast<float>(index.y[i]), d[p]});
     }
   }
 }
@@ -406,7 +412,7 @@ void AdjacentSegments(const cv::Mat& labels, const SegmentIndex& index, int segm
   neighbours->clear();
   for (int i = index.offsets[segment]; i < index.offsets[segment + 1]; ++i) {
     const int p = index.pixels[i];
-    const int x = p % width, y = p / width;
+    const int x = index.x[i], y = index.y[i];
     const int around[4] = {x > 0 ? label[p - 1] : segment, x + 1 < width ? label[p + 1] : segment,
                            y > 0 ? label[p - width] : segment,
                            y + 1 < height ? label[p + width] : segment};
@@ -474,13 +480,13 @@ namespace {
 // surfaces (an occlusion) they take the background, i.e. the smaller plane value.
 void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& model,
                     const PlaneRefinementOptions& options, const SegmentPhotometry* photometry,
-                    float min_value, float max_value, int width, float* d, int64_t* filled,
+                    float min_value, float max_value, float* d, int64_t* filled,
                     int64_t* replaced) {
   constexpr int8_t kHole = -1;
   const int begin = index.offsets[segment], end = index.offsets[segment + 1];
   std::vector<int8_t> surface(end - begin);
-  auto plane_value = [&](int k, int p) {
-    return std::clamp(static_cast<float>(model.planes[k].At(p % width, p / width)), min_value,
+  auto plane_value = [&](int k, int i) {
+    return std::clamp(static_cast<float>(model.planes[k].At(index.x[i], index.y[i])), min_value,
                       max_value);
   };
   for (int i = begin; i < end; ++i) {
@@ -488,13 +494,13 @@ void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& 
     int8_t& s = surface[i - begin];
     s = kHole;
     if (!IsValidDisparity(d[p])) continue;
-    const float p0 = plane_value(0, p), p1 = plane_value(1, p);
+    const float p0 = plane_value(0, i), p1 = plane_value(1, i);
     const float r0 = std::abs(d[p] - p0), r1 = std::abs(d[p] - p1);
     if (photometry) {
       // The images decide which surface a matched pixel is on: a window restricted to the segment
       // does not straddle the depth edge the way the matcher's window did (foreground fattening).
-      const float c0 = photometry->Cost(p % width, p / width, segment, model.planes[0]);
-      const float c1 = photometry->Cost(p % width, p / width, segment, model.planes[1]);
+      const float c0 = photometry->Cost(index.x[i], index.y[i], segment, model.planes[0]);
+      const float c1 = photometry->Cost(index.x[i], index.y[i], segment, model.planes[1]);
       s = c0 < c1 || (c0 == c1 && p0 <= p1) ? 0 : 1;
       const float plane = s == 0 ? p0 : p1;
       if ((s == 0 ? r0 : r1) > options.outlier_threshold) {
@@ -515,9 +521,9 @@ void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& 
   // Pixels of one row are consecutive in the index (raster order).
   std::vector<int8_t> left_surface;
   for (int row_begin = begin; row_begin < end;) {
-    const int y = index.pixels[row_begin] / width;
+    const int y = index.y[row_begin];
     int row_end = row_begin;
-    while (row_end < end && index.pixels[row_end] / width == y) ++row_end;
+    while (row_end < end && index.y[row_end] == y) ++row_end;
     left_surface.assign(row_end - row_begin, kHole);
     int8_t last = kHole;
     for (int i = row_begin; i < row_end; ++i) {
@@ -535,9 +541,9 @@ void ApplyTwoPlanes(const SegmentIndex& index, int segment, const SegmentModel& 
       if (left == kHole && next == kHole) continue;  // left to the background fill
       const int p = index.pixels[i];
       if (left == kHole || next == kHole || left == next) {
-        d[p] = plane_value(left == kHole ? next : left, p);
+        d[p] = plane_value(left == kHole ? next : left, i);
       } else {
-        d[p] = std::min(plane_value(0, p), plane_value(1, p));
+        d[p] = std::min(plane_value(0, i), plane_value(1, i));
       }
       ++*filled;
     }
@@ -583,7 +589,6 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
                         PlaneRefinementStats* stats) {
   LS_CHECK(disparity->type() == CV_32FC1 && disparity->isContinuous());
   const int segments = static_cast<int>(models.size());
-  const int width = disparity->cols;
   float* d = disparity->ptr<float>();
   std::vector<int64_t> replaced(segments, 0), filled(segments, 0);
   cv::parallel_for_(cv::Range(0, segments), [&](const cv::Range& range) {
@@ -593,7 +598,7 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
       const bool two = model.kind == SegmentModelKind::kTwoPlanes;
       for (int i = index.offsets[s]; !two && i < index.offsets[s + 1]; ++i) {
         const int p = index.pixels[i];
-        const double x = p % width, y = p / width;
+        const double x = index.x[i], y = index.y[i];
         const float value = d[p];
         const bool valid = IsValidDisparity(value);
         const float plane =
@@ -609,8 +614,8 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
         }
       }
       if (two) {
-        ApplyTwoPlanes(index, s, model, options, photometry, min_value, max_value, width, d,
-                       &filled[s], &replaced[s]);
+        ApplyTwoPlanes(index, s, model, options, photometry, min_value, max_value, d, &filled[s],
+                       &replaced[s]);
       }
     }
   });

@@ -136,6 +136,7 @@ struct PlanePoint {
 struct SegmentIndex {
   std::vector<int32_t> offsets;
   std::vector<int32_t> pixels;
+  std::vector<int32_t> x, y;  // column and row of pixels[i] (no division per use)
   int Size(int segment) const { return offsets[segment + 1] - offsets[segment]; }
 };
 
