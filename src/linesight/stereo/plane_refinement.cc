@@ -125,25 +125,30 @@ int CountInliers(const ScoringSample& sample, const DisparityPlane& plane, doubl
 // MarkInliers and AccumulateNormalEquations over the marked points in one pass, branch-free (the
 // inlier test is unpredictable on noisy segments): every point adds its terms times 1 or 0, which
 // gives the same sums in the same order as adding the inliers only.
+// Also returns the sum of squared inlier residuals (as MarkInliers sums them) in *squares.
 int MarkAndAccumulateInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
                              double threshold, double ox, double oy, std::vector<uint8_t>* mask,
-                             PlaneNormalEquations* equations) {
+                             PlaneNormalEquations* equations, double* squares) {
   mask->resize(points.size());
   uint8_t* marks = mask->data();
   PlaneNormalEquations e;
   int count = 0;
+  double sum_squares = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const PlanePoint& p = points[i];
-    const bool inlier = std::abs(plane.At(p.x, p.y) - p.d) <= threshold;
+    const double r = plane.At(p.x, p.y) - p.d;
+    const bool inlier = std::abs(r) <= threshold;
     marks[i] = inlier;
     count += inlier;
     const double w = inlier ? 1.0 : 0.0;
+    sum_squares += w * (r * r);
     const double x = p.x - ox, y = p.y - oy, d = p.d;
     e.sxx += w * (x * x), e.sxy += w * (x * y), e.syy += w * (y * y);
     e.sx += w * x, e.sy += w * y, e.n += w;
     e.sxd += w * (x * d), e.syd += w * (y * d), e.sd += w * d;
   }
   *equations = e;
+  *squares = sum_squares;
   return count;
 }
 
@@ -277,21 +282,35 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
     }
   }
 
-  // Least squares on the inliers, re-selected after every refit.
+  // Least squares on the inliers, re-selected after every refit. Once a refit selects the same
+  // inliers as the previous one it would reproduce the same plane: the remaining refits are
+  // skipped (the result is the same as running them all).
+  thread_local std::vector<uint8_t> previous_mask;
+  int count = 0;
+  double squares = 0;
+  bool marked_best = false;  // inlier_mask, count and squares belong to `best`
   for (int it = 0; it < options.refit_iterations; ++it) {
     PlaneNormalEquations equations;
-    if (MarkAndAccumulateInliers(points, best, threshold, ox, oy, &fit->inlier_mask, &equations) <
-        3) {
-      break;
-    }
+    count = MarkAndAccumulateInliers(points, best, threshold, ox, oy, &fit->inlier_mask, &equations,
+                                     &squares);
+    marked_best = true;
+    if (count < 3) break;
+    if (it > 0 && fit->inlier_mask == previous_mask) break;
     DisparityPlane refined;
     if (!SolvePlane(equations, ox, oy, &refined) || !WithinSlant(refined, options.max_slant)) {
       break;
     }
     best = refined;
+    marked_best = false;
+    std::swap(previous_mask, fit->inlier_mask);
   }
   fit->plane = best;
-  fit->inliers = MarkInliers(points, best, threshold, &fit->inlier_mask, &fit->residual_rms);
+  if (marked_best) {
+    fit->inliers = count;
+    fit->residual_rms = count > 0 ? std::sqrt(squares / count) : 0.0;
+  } else {
+    fit->inliers = MarkInliers(points, best, threshold, &fit->inlier_mask, &fit->residual_rms);
+  }
   return true;
 }
 
