@@ -1,6 +1,7 @@
 #include "linesight/stereo/plane_refinement.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -173,29 +174,62 @@ int MarkInliers(const std::vector<PlanePoint>& points, const DisparityPlane& pla
 
 SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments) {
   LS_CHECK(labels.type() == CV_32SC1);
+  // Counting sort in raster order, over a fixed number of row stripes in parallel: stripe t writes
+  // each segment's pixels after those of stripes < t, so the result is the serial one.
+  constexpr int kStripes = 4;
+  const int rows = labels.rows, cols = labels.cols;
+  const auto stripe_rows = [&](int t) {
+    return cv::Range(rows * t / kStripes, rows * (t + 1) / kStripes);
+  };
+  std::vector<int32_t> counts(static_cast<size_t>(kStripes) * num_segments, 0);
+  std::atomic<bool> bad_label{false};
+  cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+    for (int t = range.start; t < range.end; ++t) {
+      int32_t* count = &counts[static_cast<size_t>(t) * num_segments];
+      const cv::Range r = stripe_rows(t);
+      for (int y = r.start; y < r.end; ++y) {
+        const int32_t* l = labels.ptr<int32_t>(y);
+        for (int x = 0; x < cols; ++x) {
+          if (l[x] < 0 || l[x] >= num_segments) {
+            bad_label = true;
+            return;
+          }
+          ++count[l[x]];
+        }
+      }
+    }
+  });
+  LS_CHECK(!bad_label);
   SegmentIndex index;
   index.offsets.assign(num_segments + 1, 0);
-  for (int y = 0; y < labels.rows; ++y) {
-    const int32_t* l = labels.ptr<int32_t>(y);
-    for (int x = 0; x < labels.cols; ++x) {
-      LS_CHECK(l[x] >= 0 && l[x] < num_segments);
-      ++index.offsets[l[x] + 1];
+  std::vector<int32_t> cursors(counts.size());
+  int32_t total = 0;
+  for (int s = 0; s < num_segments; ++s) {
+    index.offsets[s] = total;
+    for (int t = 0; t < kStripes; ++t) {
+      cursors[static_cast<size_t>(t) * num_segments + s] = total;
+      total += counts[static_cast<size_t>(t) * num_segments + s];
     }
   }
-  for (int s = 0; s < num_segments; ++s) index.offsets[s + 1] += index.offsets[s];
+  index.offsets[num_segments] = total;
   index.pixels.resize(labels.total());
   index.x.resize(labels.total());
   index.y.resize(labels.total());
-  std::vector<int32_t> cursor(index.offsets.begin(), index.offsets.end() - 1);
-  for (int y = 0; y < labels.rows; ++y) {
-    const int32_t* l = labels.ptr<int32_t>(y);
-    for (int x = 0; x < labels.cols; ++x) {
-      const int32_t at = cursor[l[x]]++;
-      index.pixels[at] = y * labels.cols + x;
-      index.x[at] = x;
-      index.y[at] = y;
+  cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+    for (int t = range.start; t < range.end; ++t) {
+      int32_t* cursor = &cursors[static_cast<size_t>(t) * num_segments];
+      const cv::Range r = stripe_rows(t);
+      for (int y = r.start; y < r.end; ++y) {
+        const int32_t* l = labels.ptr<int32_t>(y);
+        for (int x = 0; x < cols; ++x) {
+          const int32_t at = cursor[l[x]]++;
+          index.pixels[at] = y * cols + x;
+          index.x[at] = x;
+          index.y[at] = y;
+        }
+      }
     }
-  }
+  });
   return index;
 }
 
@@ -649,29 +683,34 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
 int64_t FillFromBackground(cv::Mat* disparity) {
   LS_CHECK(disparity->type() == CV_32FC1);
   const int width = disparity->cols, height = disparity->rows;
-  int64_t filled = 0;
   std::vector<uint8_t> row_has_valid(height, 0);
-  std::vector<float> from_left(width);
-  for (int y = 0; y < height; ++y) {
-    float* d = disparity->ptr<float>(y);
-    float last = kInvalidDisparity;
-    for (int x = 0; x < width; ++x) {
-      if (IsValidDisparity(d[x])) last = d[x];
-      from_left[x] = last;
-    }
-    if (!IsValidDisparity(last)) continue;
-    row_has_valid[y] = 1;
-    float next = kInvalidDisparity;
-    for (int x = width - 1; x >= 0; --x) {
-      if (IsValidDisparity(d[x])) {
-        next = d[x];
-        continue;
+  std::vector<int64_t> row_filled(height, 0);
+  // Rows are independent here: in parallel.
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
+    std::vector<float> from_left(width);
+    for (int y = range.start; y < range.end; ++y) {
+      float* d = disparity->ptr<float>(y);
+      float last = kInvalidDisparity;
+      for (int x = 0; x < width; ++x) {
+        if (IsValidDisparity(d[x])) last = d[x];
+        from_left[x] = last;
       }
-      // +inf on a missing side makes min() pick the other side.
-      d[x] = std::min(from_left[x], next);
-      ++filled;
+      if (!IsValidDisparity(last)) continue;
+      row_has_valid[y] = 1;
+      float next = kInvalidDisparity;
+      for (int x = width - 1; x >= 0; --x) {
+        if (IsValidDisparity(d[x])) {
+          next = d[x];
+          continue;
+        }
+        // +inf on a missing side makes min() pick the other side.
+        d[x] = std::min(from_left[x], next);
+        ++row_filled[y];
+      }
     }
-  }
+  });
+  int64_t filled = 0;
+  for (const int64_t n : row_filled) filled += n;
   // Rows without any valid pixel copy the nearest row that had one (the upper one on a tie).
   int nearest_above = -1;
   for (int y = 0; y < height; ++y) {
@@ -731,16 +770,24 @@ cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_
   st = PlaneRefinementStats();
   cv::Mat out = disparity.clone();  // continuous
 
-  float min_value = std::numeric_limits<float>::max(),
-        max_value = std::numeric_limits<float>::lowest();
-  for (int y = 0; y < out.rows; ++y) {
-    const float* d = out.ptr<float>(y);
-    for (int x = 0; x < out.cols; ++x) {
-      if (!IsValidDisparity(d[x])) continue;
-      min_value = std::min(min_value, d[x]);
-      max_value = std::max(max_value, d[x]);
+  // Range of the valid disparities, per row in parallel (min / max are exact in any order).
+  std::vector<float> row_min(out.rows, std::numeric_limits<float>::max()),
+      row_max(out.rows, std::numeric_limits<float>::lowest());
+  cv::parallel_for_(cv::Range(0, out.rows), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y) {
+      const float* d = out.ptr<float>(y);
+      float lo = row_min[y], hi = row_max[y];
+      for (int x = 0; x < out.cols; ++x) {
+        if (!IsValidDisparity(d[x])) continue;
+        lo = std::min(lo, d[x]);
+        hi = std::max(hi, d[x]);
+      }
+      row_min[y] = lo;
+      row_max[y] = hi;
     }
-  }
+  });
+  const float min_value = *std::min_element(row_min.begin(), row_min.end());
+  const float max_value = *std::max_element(row_max.begin(), row_max.end());
   if (min_value > max_value) {
     out.setTo(0.0f);
     st.holes_filled_from_background = static_cast<int64_t>(out.total());

@@ -280,6 +280,37 @@ TEST(RefineDisparityWithPlanes, DoesNotFlattenASegmentStraddlingADepthEdge) {
   EXPECT_EQ(cv::norm(out, d, cv::NORM_INF), 0.0);
 }
 
+TEST(BuildSegmentIndex, EqualsNaiveRasterOrderOnAwkwardSizes) {
+  cv::RNG rng(3);
+  for (const cv::Size size : {cv::Size(311, 239), cv::Size(1, 1), cv::Size(5, 3), cv::Size(2, 9)}) {
+    const int segments = 1 + size.area() / 40;
+    cv::Mat labels(size, CV_32SC1);
+    for (int y = 0; y < size.height; ++y) {
+      for (int x = 0; x < size.width; ++x) {
+        // Mostly blocks (as superpixels), some scattered labels, one segment left empty.
+        const int block = (y / 7) * ((size.width + 6) / 7) + x / 7;
+        labels.at<int32_t>(y, x) =
+            rng.uniform(0, 10) == 0 ? rng.uniform(0, segments) : block % segments;
+      }
+    }
+    const detail::SegmentIndex index = detail::BuildSegmentIndex(labels, segments + 1);
+    ASSERT_EQ(index.offsets.size(), static_cast<size_t>(segments + 2));
+    EXPECT_EQ(index.Size(segments), 0);
+    std::vector<int32_t> expected;
+    for (int s = 0; s <= segments; ++s) {
+      ASSERT_EQ(index.offsets[s], static_cast<int32_t>(expected.size())) << s;
+      for (int p = 0; p < size.area(); ++p) {
+        if (labels.at<int32_t>(p / size.width, p % size.width) == s) expected.push_back(p);
+      }
+    }
+    ASSERT_EQ(index.pixels, expected);
+    for (size_t i = 0; i < expected.size(); ++i) {
+      ASSERT_EQ(index.x[i], expected[i] % size.width);
+      ASSERT_EQ(index.y[i], expected[i] / size.width);
+    }
+  }
+}
+
 TEST(FillFromBackground, TakesTheSmallerSideAlongTheRow) {
   const float inf = kInvalidDisparity;
   cv::Mat d = (cv::Mat_<float>(4, 7) << 20, 20, inf, inf, inf, 10, 10,  // occlusion between
