@@ -138,21 +138,29 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
   struct Run {
     int32_t start, length, parent;
   };
-  std::vector<Run> runs;
-  runs.reserve(static_cast<size_t>(height) * 64);
+  // The runs of each row, rows in parallel, then concatenated in raster order.
+  std::vector<std::vector<Run>> row_runs(height);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y) {
+      const int32_t* l = label + static_cast<ptrdiff_t>(y) * width;
+      std::vector<Run>& out = row_runs[y];
+      for (int x = 0; x < width;) {
+        int end = x + 1;
+        while (end < width && l[end] == l[x]) ++end;
+        out.push_back({y * width + x, end - x, 0});
+        x = end;
+      }
+    }
+  });
   std::vector<int32_t> row_begin(height + 1, 0);
   for (int y = 0; y < height; ++y) {
-    const int32_t* l = label + static_cast<ptrdiff_t>(y) * width;
-    row_begin[y] = static_cast<int32_t>(runs.size());
-    for (int x = 0; x < width;) {
-      int end = x + 1;
-      while (end < width && l[end] == l[x]) ++end;
-      const int32_t id = static_cast<int32_t>(runs.size());
-      runs.push_back({y * width + x, end - x, id});
-      x = end;
-    }
+    row_begin[y + 1] = row_begin[y] + static_cast<int32_t>(row_runs[y].size());
   }
-  row_begin[height] = static_cast<int32_t>(runs.size());
+  std::vector<Run> runs(row_begin[height]);
+  for (int y = 0; y < height; ++y) {
+    std::copy(row_runs[y].begin(), row_runs[y].end(), runs.begin() + row_begin[y]);
+  }
+  for (size_t r = 0; r < runs.size(); ++r) runs[r].parent = static_cast<int32_t>(r);
   auto find = [&](int32_t r) {
     while (runs[r].parent != r) {
       runs[r].parent = runs[runs[r].parent].parent;
@@ -188,20 +196,32 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
     runs[r].parent = find(r);
     root_info[runs[r].parent] += runs[r].length;
   }
+  // New labels in raster order (serial: a small piece takes the new label of the pixel before its
+  // first pixel, which an earlier run already decided), then the pixels in parallel.
   int next = 0;
+  std::vector<int32_t> value(count);
   for (int r = 0; r < count; ++r) {
     const int p = runs[r].start;
-    int value;
     if (runs[r].parent != r) {
-      value = root_info[runs[r].parent];
+      value[r] = root_info[runs[r].parent];
     } else {
       const int x = p % width;
-      const int adjacent = x > 0 ? label[p - 1] : (p >= width ? label[p - width] : -1);
-      value = root_info[r] < min_size && adjacent >= 0 ? adjacent : next++;
-      root_info[r] = value;
+      // The pixel before: its run is an earlier one, already relabelled.
+      int adjacent = -1;
+      if (x > 0) {
+        adjacent = value[r - 1];
+      } else if (p >= width) {
+        adjacent = value[row_begin[p / width - 1]];  // the first run of the row above
+      }
+      value[r] = root_info[r] < min_size && adjacent >= 0 ? adjacent : next++;
+      root_info[r] = value[r];
     }
-    std::fill(label + p, label + p + runs[r].length, value);
   }
+  cv::parallel_for_(cv::Range(0, count), [&](const cv::Range& range) {
+    for (int r = range.start; r < range.end; ++r) {
+      std::fill(label + runs[r].start, label + runs[r].start + runs[r].length, value[r]);
+    }
+  });
   return next;
 }
 
