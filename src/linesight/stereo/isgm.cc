@@ -43,16 +43,29 @@ IsgmMatcher::IsgmMatcher(const IsgmOptions& options) : options_(options), sgm_(o
 
 IsgmResult IsgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right) {
   IsgmResult result;
-  result.sgm = sgm_.ComputeDetailed(left, right);
+  Run(left, right, &result.sgm, &result);
+  return result;
+}
+
+cv::Mat IsgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
+  IsgmResult result;
+  Run(left, right, &sgm_scratch_, &result);
+  return result.disparity;
+}
+
+void IsgmMatcher::Run(const cv::Mat& left, const cv::Mat& right, SgmResult* sgm_result,
+                      IsgmResult* result_out) {
+  IsgmResult& result = *result_out;
+  sgm_.ComputeDetailed(left, right, sgm_result);
+  const SgmResult& sgm = *sgm_result;
   // The refinement runs on OpenCV's thread pool (like the OpenCV matchers, we size it from the
   // options); its result does not depend on the thread count.
   if (options_.sgm.threads > 0) cv::setNumThreads(options_.sgm.threads);
   // Superpixels on the grey image: as accurate as 8-bit Lab on every benchmark set we measured
   // (better on ETH3D, KITTI, Middlebury 2005/2014) at a third of the distance computations.
   const cv::Mat left_for_segments = ToGray8(left), right_for_segments = ToGray8(right);
-  result.disparity =
-      RefineDisparityWithPlanes(result.sgm.disparity, left_for_segments, right_for_segments,
-                                options_.refinement, &result.refinement);
+  result.disparity = RefineDisparityWithPlanes(sgm.disparity, left_for_segments, right_for_segments,
+                                               options_.refinement, &result.refinement);
   // Planes are clamped to the range of SGM's valid values; if SGM found nothing, the zeros of the
   // fill are moved into the search range.
   const float lo = static_cast<float>(options_.sgm.min_disparity);
@@ -62,11 +75,6 @@ IsgmResult IsgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& righ
     float* d = result.disparity.ptr<float>(y);
     for (int x = 0; x < result.disparity.cols; ++x) d[x] = std::clamp(d[x], lo, hi);
   }
-  return result;
-}
-
-cv::Mat IsgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
-  return ComputeDetailed(left, right).disparity;
 }
 
 nlohmann::json IsgmMatcher::Settings() const {

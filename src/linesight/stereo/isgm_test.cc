@@ -166,3 +166,33 @@ TEST(IsgmMatcher, TsukubaDenseBad1Nonocc) {
 
 }  // namespace
 }  // namespace linesight
+
+namespace linesight {
+namespace {
+
+// Compute() reuses its internal buffers between frames: an earlier returned map must stay intact.
+TEST(IsgmMatcher, ComputeReturnsAFreshMapEveryFrame) {
+  cv::Mat left_a, right_a, truth_a, left_b, right_b, truth_b;
+  MakeTwoSurfacePair(120, 80, &left_a, &right_a, &truth_a);
+  MakeTwoSurfacePair(120, 80, &left_b, &right_b, &truth_b);
+  cv::flip(left_b, left_b, 0);
+  cv::flip(right_b, right_b, 0);
+  IsgmOptions o;
+  o.sgm.num_disparities = 24;
+  IsgmMatcher isgm(o);
+  SgmMatcher sgm(o.sgm);
+  const cv::Mat isgm_a = isgm.Compute(left_a, right_a), sgm_a = sgm.Compute(left_a, right_a);
+  const cv::Mat isgm_a_copy = isgm_a.clone(), sgm_a_copy = sgm_a.clone();
+  const cv::Mat isgm_b = isgm.Compute(left_b, right_b), sgm_b = sgm.Compute(left_b, right_b);
+  EXPECT_NE(isgm_a.data, isgm_b.data);
+  EXPECT_NE(sgm_a.data, sgm_b.data);
+  EXPECT_EQ(cv::norm(isgm_a, isgm_a_copy, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::countNonZero(sgm_a != sgm_a_copy), 0);
+  // The frames differ, and the reused buffers give what a fresh matcher gives.
+  EXPECT_GT(cv::countNonZero(sgm_a != sgm_b), 0);
+  EXPECT_EQ(cv::norm(isgm_b, IsgmMatcher(o).Compute(left_b, right_b), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::countNonZero(sgm_b != SgmMatcher(o.sgm).Compute(left_b, right_b)), 0);
+}
+
+}  // namespace
+}  // namespace linesight

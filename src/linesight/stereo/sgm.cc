@@ -143,6 +143,7 @@ struct SgmMatcher::Scratch {
   detail::SweepScratch forward, backward;
   cv::Mat best, right_best;  // per pixel, from the WTA
   cv::Mat fixed, filtered, speckle_buffer;
+  SgmResult result;  // Compute()'s intermediate maps, reused between frames
 };
 
 SgmMatcher::SgmMatcher(const SgmOptions& options)
@@ -153,7 +154,12 @@ SgmMatcher::SgmMatcher(const SgmOptions& options)
 SgmMatcher::~SgmMatcher() = default;
 
 cv::Mat SgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
-  return ComputeDetailed(left, right).disparity;
+  // The intermediate maps stay allocated between frames (no page faults for 7 MB per frame at
+  // 752x480); the returned disparity is a fresh buffer every time.
+  SgmResult& reused = scratch_->result;
+  reused.disparity = cv::Mat();
+  ComputeDetailed(left, right, &reused);
+  return reused.disparity;
 }
 
 nlohmann::json SgmMatcher::Settings() const {
@@ -163,7 +169,15 @@ nlohmann::json SgmMatcher::Settings() const {
   return settings;
 }
 
-SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right_input) {
+SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right) {
+  SgmResult result;
+  ComputeDetailed(left, right, &result);
+  return result;
+}
+
+void SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right_input,
+                                 SgmResult* result_out) {
+  LS_CHECK(result_out != nullptr);
   if (left_input.empty() || right_input.empty()) throw InputError("sgm: input image is empty");
   if (left_input.size() != right_input.size()) {
     throw InputError(fmt::format("sgm: left image is {}x{} but right image is {}x{}",
@@ -209,7 +223,7 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
   input.p2 = o.p2;
   input.p2_gradient_alpha = o.p2_gradient_alpha;
 
-  SgmResult result;
+  SgmResult& result = *result_out;
   result.raw_disparity.create(h, w, CV_32FC1);
   result.right_disparity.create(h, w, CV_32FC1);
   result.invalid_reason.create(h, w, CV_8UC1);
@@ -269,7 +283,7 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
 
   // Stage 5: speckle filter on the fixed-point map.
   if (o.speckle_window > 0) {
-    s.filtered = s.fixed.clone();
+    s.fixed.copyTo(s.filtered);  // reuses the buffer
     cv::filterSpeckles(s.filtered, detail::kSgmInvalidFixed, o.speckle_window,
                        static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)),
                        s.speckle_buffer);
@@ -305,7 +319,6 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& 
                    : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
     }
   }
-  return result;
 }
 
 cv::Mat SgmConfidence(const SgmResult& result) {

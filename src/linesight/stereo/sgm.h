@@ -119,6 +119,9 @@ class SgmMatcher final : public StereoMatcher {
 
   // The whole pipeline with its intermediate products (for refinement stages such as isgm).
   SgmResult ComputeDetailed(const cv::Mat& left, const cv::Mat& right);
+  // The same into *result, reusing its buffers when they have the right size and type (their
+  // contents are overwritten; give an empty or own SgmResult to keep an earlier one).
+  void ComputeDetailed(const cv::Mat& left, const cv::Mat& right, SgmResult* result);
 
   const SgmOptions& options() const { return options_; }
 
