@@ -142,7 +142,7 @@ struct SgmMatcher::Scratch {
   detail::SumVolume sum;
   detail::SweepScratch forward, backward;
   cv::Mat best, right_best;  // per pixel, from the WTA
-  cv::Mat fixed, filtered, speckle_buffer;
+  cv::Mat fixed, filtered, smoothed, speckle_buffer;
   SgmResult result;  // Compute()'s intermediate maps, reused between frames
 };
 
@@ -281,44 +281,44 @@ void SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right
   };
   detail::AggregatePaths(input, std::min(threads, 2), &s.sum, &s.forward, &s.backward, finish_row);
 
-  // Stage 5: speckle filter on the fixed-point map.
+  // Stage 5: speckle filter on the fixed-point map (OpenCV's, serial).
+  const cv::Mat* map = &s.fixed;
   if (o.speckle_window > 0) {
     s.fixed.copyTo(s.filtered);  // reuses the buffer
     cv::filterSpeckles(s.filtered, detail::kSgmInvalidFixed, o.speckle_window,
                        static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)),
                        s.speckle_buffer);
-    for (int y = 0; y < h; ++y) {
-      const int16_t* before = s.fixed.ptr<int16_t>(y);
-      const int16_t* after = s.filtered.ptr<int16_t>(y);
-      uint8_t* reason = result.invalid_reason.ptr<uint8_t>(y);
-      for (int x = 0; x < w; ++x) {
-        if (before[x] != detail::kSgmInvalidFixed && after[x] == detail::kSgmInvalidFixed) {
-          reason[x] = static_cast<uint8_t>(SgmInvalid::kSpeckle);
+    map = &s.filtered;
+  }
+  // Stage 6 and output, rows in parallel: speckle reasons, 3×3 median over valid neighbours, float
+  // disparities.
+  if (o.median) s.smoothed.create(h, w, CV_16SC1);
+  result.disparity.create(h, w, CV_32FC1);
+  detail::ParallelRanges(h, threads, [&](int begin, int end) {
+    if (o.speckle_window > 0) {
+      for (int y = begin; y < end; ++y) {
+        const int16_t* before = s.fixed.ptr<int16_t>(y);
+        const int16_t* after = s.filtered.ptr<int16_t>(y);
+        uint8_t* reason = result.invalid_reason.ptr<uint8_t>(y);
+        for (int x = 0; x < w; ++x) {
+          if (before[x] != detail::kSgmInvalidFixed && after[x] == detail::kSgmInvalidFixed) {
+            reason[x] = static_cast<uint8_t>(SgmInvalid::kSpeckle);
+          }
         }
       }
     }
-    std::swap(s.fixed, s.filtered);
-  }
-
-  // Stage 6: 3×3 median over valid neighbours.
-  if (o.median) {
-    s.filtered.create(h, w, CV_16SC1);
-    detail::ParallelRanges(h, threads, [&](int begin, int end) {
-      detail::MedianValid3x3(s.fixed, s.filtered, begin, end);
-    });
-    std::swap(s.fixed, s.filtered);
-  }
-
-  result.disparity.create(h, w, CV_32FC1);
-  for (int y = 0; y < h; ++y) {
-    const int16_t* fixed = s.fixed.ptr<int16_t>(y);
-    float* out = result.disparity.ptr<float>(y);
-    for (int x = 0; x < w; ++x) {
-      out[x] = fixed[x] == detail::kSgmInvalidFixed
-                   ? kInvalidDisparity
-                   : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
+    if (o.median) detail::MedianValid3x3(*map, s.smoothed, begin, end);
+    const cv::Mat& final_map = o.median ? s.smoothed : *map;
+    for (int y = begin; y < end; ++y) {
+      const int16_t* fixed = final_map.ptr<int16_t>(y);
+      float* out = result.disparity.ptr<float>(y);
+      for (int x = 0; x < w; ++x) {
+        out[x] = fixed[x] == detail::kSgmInvalidFixed
+                     ? kInvalidDisparity
+                     : static_cast<float>(fixed[x]) / kSgmSubpixelScale;
+      }
     }
-  }
+  });
 }
 
 cv::Mat SgmConfidence(const SgmResult& result) {
