@@ -726,11 +726,15 @@ void WinnerTakesAllRowRegisters(const uint16_t* sum_row, int width, int min_disp
   const int n = static_cast<int>(hn::Lanes(d));
   const int padded = kVectors * n;
   const V all_ones = hn::Set(d, uint16_t{0xFFFF});
-  const V two = hn::Set(d, uint16_t{2});
   V iota[kVectors], run_cost[kVectors + 1], run_k[kVectors + 1];
   for (int v = 0; v < kVectors; ++v) iota[v] = hn::Iota(d, static_cast<uint16_t>(v * n));
   for (int v = 0; v <= kVectors; ++v) run_cost[v] = run_k[v] = all_ones;
   alignas(64) uint16_t lanes[(kVectors + 1) * kMaxLanes];
+  // Sliding window of the lanes excluded from the second best: excluded[padded + k - best] is
+  // 0xFFFF for k = best - 1, best, best + 1 and 0 otherwise, so OR-ing a vector of costs with the
+  // window at its offset removes those lanes from the minimum.
+  alignas(64) uint16_t excluded[3 * kVectors * kMaxLanes] = {};
+  for (int i = padded - 1; i <= padded + 1; ++i) excluded[i] = 0xFFFF;
   // Lane j of the register holds right pixel x_last - min_disparity - j.
   auto emit = [&](int first_vector, int x_last) HWY_ATTR {
     for (int v = first_vector; v <= kVectors; ++v) hn::Store(run_k[v], d, lanes + v * n);
@@ -752,14 +756,11 @@ void WinnerTakesAllRowRegisters(const uint16_t* sum_row, int width, int min_disp
       index = hn::Min(index, hn::IfThenElse(hn::Eq(costs[v], best_cost_v), iota[v], all_ones));
     }
     const int best = SmallestLane(d, index);
-    // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are
-    // excluded.
-    const V low = hn::Set(d, static_cast<uint16_t>(best - 1));
+    // Second best more than one disparity away.
+    const uint16_t* window = excluded + padded - best;
     V second = all_ones;
     for (int v = 0; v < kVectors; ++v) {
-      const V offset = hn::Sub(iota[v], low);
-      second =
-          hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), second, hn::Min(second, costs[v]));
+      second = hn::Min(second, hn::Or(costs[v], hn::LoadU(d, window + v * n)));
     }
     out.best[x] = static_cast<int16_t>(best);
     out.best_cost[x] = best_cost;
