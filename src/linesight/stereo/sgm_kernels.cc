@@ -373,8 +373,9 @@ HWY_INLINE hn::TFromD<D> SmallestLane(D d, V v) {
 }
 #endif
 
-// Adds the uint16 lanes of the path-cost vector l (of T) into acc0; for uint8 lanes, acc0 takes
-// the even disparities of the vector and acc1 the odd ones (masks and shifts instead of
+// Adds the uint16 lanes of the path-cost vector l (of T) into acc0. For uint8 lanes acc1 takes the
+// odd disparities of the vector and acc0 the byte pairs (even + 256 odd, modulo 2^16): after the
+// last path EvenSums(acc0, acc1) leaves the even disparities' sums in acc0 (shifts instead of
 // cross-lane widening; EvenOddToNatural restores the order).
 template <class D, class DW, class V, class VW>
 HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
@@ -382,7 +383,7 @@ HWY_INLINE void Accumulate(D d, DW dw, V l, VW* acc0, VW* acc1) {
   if constexpr (sizeof(hn::TFromD<D>) == 1) {
     (void)d;
     const auto pairs = hn::BitCast(dw, l);
-    *acc0 = hn::Add(*acc0, hn::And(pairs, hn::Set(dw, uint16_t{0xFF})));
+    *acc0 = hn::Add(*acc0, pairs);
     *acc1 = hn::Add(*acc1, hn::ShiftRight<8>(pairs));
   } else
 #endif
@@ -495,6 +496,12 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
       minima[p] = hn::Min(minima[p], l);
       Accumulate(d, dw, l, &acc0, &acc1);
     }
+#if HWY_TARGET != HWY_SCALAR
+    if constexpr (sizeof(T) == 1) {
+      // Sum of pairs minus 256 x the odd sums = the even sums, exact: they stay below 2^16.
+      acc0 = hn::Sub(acc0, hn::ShiftLeft<8>(acc1));
+    }
+#endif
     if constexpr (kAdd) {
 #if HWY_TARGET != HWY_SCALAR
       if constexpr (sizeof(T) == 1) {
