@@ -32,15 +32,20 @@ void AssignGreyBlockImpl(const uint8_t* features, size_t feature_stride, int wid
   const auto weight = hn::Set(df, spatial_weight);
   alignas(64) uint8_t pixels[64] = {};
   alignas(64) int32_t out[64];
+  hn::Vec<decltype(df)> centre_x[4], centre_f[4];
+  for (int i = 0; i < 4; ++i) {
+    centre_x[i] = hn::Set(df, cx[i]);
+    centre_f[i] = hn::Set(df, cf[i]);
+  }
+  const auto ids0 = hn::Set(di, ids[0]), ids1 = hn::Set(di, ids[1]);
+  const auto ids2 = hn::Set(di, ids[2]), ids3 = hn::Set(di, ids[3]);
   for (int y = ya; y < yb; ++y) {
     const uint8_t* f = features + static_cast<size_t>(y) * feature_stride;
     int32_t* l = labels + static_cast<size_t>(y) * label_stride;
-    hn::Vec<decltype(df)> row_term[4], centre_x[4], centre_f[4];
+    hn::Vec<decltype(df)> row_term[4];
     for (int i = 0; i < 4; ++i) {
       const float dy = static_cast<float>(y) - cy[i];
       row_term[i] = hn::Set(df, spatial_weight * dy * dy);
-      centre_x[i] = hn::Set(df, cx[i]);
-      centre_f[i] = hn::Set(df, cf[i]);
     }
     for (int x = xa; x < xb; x += n) {
       const int count = std::min(n, xb - x);
@@ -60,12 +65,10 @@ void AssignGreyBlockImpl(const uint8_t* features, size_t feature_stride, int wid
       }
       const auto first_pair = hn::Le(dist[0], dist[1]);
       const auto best01 = hn::IfThenElse(first_pair, dist[0], dist[1]);
-      const auto id01 =
-          hn::IfThenElse(hn::RebindMask(di, first_pair), hn::Set(di, ids[0]), hn::Set(di, ids[1]));
+      const auto id01 = hn::IfThenElse(hn::RebindMask(di, first_pair), ids0, ids1);
       const auto second_pair = hn::Le(dist[2], dist[3]);
       const auto best23 = hn::IfThenElse(second_pair, dist[2], dist[3]);
-      const auto id23 =
-          hn::IfThenElse(hn::RebindMask(di, second_pair), hn::Set(di, ids[2]), hn::Set(di, ids[3]));
+      const auto id23 = hn::IfThenElse(hn::RebindMask(di, second_pair), ids2, ids3);
       const auto id = hn::IfThenElse(hn::RebindMask(di, hn::Le(best01, best23)), id01, id23);
       hn::Store(id, di, out);
       std::copy(out, out + count, l + x);
