@@ -288,12 +288,14 @@ void PrintDiagnosis(const std::string& type, const std::string& calibration, int
       RangeObstacle(scene.disparity, truth_geometry, roi, pipeline.options().ranging);
   const cv::Mat& d = pipeline.RangingDisparity(frame);
   std::vector<float> errors;
+  std::vector<cv::Point> front_pixels;
   int front = 0;
   for (int y = roi.y; y < roi.br().y; ++y) {
     for (int x = roi.x; x < roi.br().x; ++x) {
       if (scene.obstacle_mask.at<uchar>(y, x) != obstacle.id) continue;
       if (scene.depth.at<float>(y, x) > 1.01 * obstacle.distance_m) continue;
       ++front;
+      front_pixels.push_back({x, y});
       if (IsValidDisparity(d.at<float>(y, x)))
         errors.push_back(d.at<float>(y, x) - scene.disparity.at<float>(y, x));
     }
@@ -304,10 +306,26 @@ void PrintDiagnosis(const std::string& type, const std::string& calibration, int
     median_error = errors[errors.size() / 2];
   }
   const double true_d = truth_geometry.DisparityFromDepth(obstacle.distance_m);
+  {
+    const SurfaceRefinement gt_ref =
+        RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified, front_pixels,
+                               result.matched_disparity_px, pipeline.options().surface);
+    double mean_true = 0;
+    for (const cv::Point& p : front_pixels) mean_true += scene.disparity.at<float>(p.y, p.x);
+    mean_true /= std::max<size_t>(1, front_pixels.size());
+    std::fprintf(
+        stderr,
+        "  surface refinement on the true front pixels: ok %d d %.3f (their true mean %.3f, "
+        "max %.3f) sigma %.3f ncc %.3f n %d %s\n",
+        int(gt_ref.ok), gt_ref.disparity_px, mean_true, true_d, gt_ref.sigma_px, gt_ref.ncc,
+        gt_ref.pixels, gt_ref.reason.c_str());
+  }
   std::fprintf(stderr,
                "diag %s %s run %d: truth %.4f m (d %.3f px) box %d,%d,%dx%d | measured %s %.4f m "
                "(%+.2f %%) d %.3f sigma_d %.3f sigma %.4f px_obst %d | gt-est %s %.4f m (%+.2f %%) "
-               "d %.3f | front %d px, %zu matched, median err %+.3f px\n",
+               "d %.3f | front %d px, %zu matched, median err %+.3f px | refined %d (matched d "
+               "%.3f, surface %zu "
+               "px mean %.3f)\n",
                calibration.c_str(), type.c_str(), run, obstacle.distance_m, true_d, obstacle.box.x,
                obstacle.box.y, obstacle.box.width, obstacle.box.height, result.ok() ? "ok" : "--",
                result.distance_m,
@@ -315,7 +333,8 @@ void PrintDiagnosis(const std::string& type, const std::string& calibration, int
                result.disparity_px, result.disparity_sigma_px, result.sigma_m,
                result.obstacle_pixels, gt.ok() ? "ok" : "--", gt.distance_m,
                gt.ok() ? 100.0 * (gt.distance_m / obstacle.distance_m - 1.0) : 0.0, gt.disparity_px,
-               front, errors.size(), median_error);
+               front, errors.size(), median_error, int(result.refined), result.matched_disparity_px,
+               result.surface_pixels.size(), result.surface_disparity_px);
   if (!result.ok()) std::fprintf(stderr, "  reason: %s\n", result.reason.c_str());
 }
 
@@ -391,7 +410,8 @@ int RunEvalRanging(int argc, char** argv) {
                  "ranging setting key=value (repeatable): near_percentile, core_fraction, "
                  "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
                  "min_body_width_px, smoothing_radius_px, checked (0|1), "
-                 "model_relative_sigma, search_from_zero (0|1)");
+                 "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2), "
+                 "surface_band_relative");
   app.add_option("--json", json_path, "report (- for stdout)");
   app.add_option("--plot", plot_path, "SVG plot of relative error vs distance");
   app.add_option("--markdown", markdown_path, "write the table as Markdown too");
@@ -426,6 +446,10 @@ int RunEvalRanging(int argc, char** argv) {
         options.range_on_checked_disparity = value != 0.0;
       } else if (key == "model_relative_sigma") {
         options.model_relative_sigma = value;
+      } else if (key == "surface_refinement") {
+        options.surface_refinement = int(value);
+      } else if (key == "surface_band_relative") {
+        options.ranging.surface_band_relative = value;
       } else if (key == "search_from_zero") {
         options.search_from_zero = value != 0.0;
       } else {

@@ -20,6 +20,9 @@ void RangingPipelineOptions::Check() const {
   CheckOption(model_relative_sigma >= 0.0 && model_relative_sigma < 0.5,
               "RangingPipelineOptions.model_relative_sigma", model_relative_sigma,
               "must be in [0, 0.5)");
+  CheckOption(surface_refinement >= 0 && surface_refinement <= 2,
+              "RangingPipelineOptions.surface_refinement", surface_refinement, "must be 0, 1 or 2");
+  surface.Check();
   rectify.Check();
 }
 
@@ -127,15 +130,43 @@ std::vector<RangeResult> RangingPipeline::RangeRois(const RangingFrame& frame,
   results.reserve(rois.size());
   for (const cv::Rect& roi : rois)
     results.push_back(RangeObstacle(RangingDisparity(frame), geometry_, roi, options_.ranging));
-  for (RangeResult& r : results) AddModelUncertainty(&r);
+  for (RangeResult& r : results) {
+    RefineSurface(frame, &r);
+    AddModelUncertainty(&r);
+  }
   return results;
 }
 
 std::vector<RangeResult> RangingPipeline::RangeAuto(const RangingFrame& frame) const {
   std::vector<RangeResult> results =
       RangeAllObstacles(RangingDisparity(frame), geometry_, options_.finder, options_.ranging);
-  for (RangeResult& r : results) AddModelUncertainty(&r);
+  for (RangeResult& r : results) {
+    RefineSurface(frame, &r);
+    AddModelUncertainty(&r);
+  }
   return results;
+}
+
+void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* result) const {
+  if (!result->ok() || options_.surface_refinement == 0 || frame.left_rectified.empty()) return;
+  const SurfaceRefinement refined =
+      RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified, result->surface_pixels,
+                             result->surface_disparity_px, options_.surface);
+  if (!refined.ok) return;
+  const double offset =
+      options_.surface_refinement == 2 ? result->disparity_px - result->surface_disparity_px : 0.0;
+  const double d = refined.disparity_px + offset;
+  if (!(d + geometry_.disparity_offset_px > 0.0)) return;
+  // Half the correction (refined minus matched surface disparity) joins the uncertainty: how much
+  // the two measurements of the same surface disagree, like the silhouette shift in RangeObstacle.
+  const double correction = 0.5 * (refined.disparity_px - result->surface_disparity_px);
+  const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
+                                   refined.sigma_px * refined.sigma_px + correction * correction);
+  result->refined = true;
+  result->disparity_px = d;
+  result->disparity_sigma_px = sigma_d;
+  result->distance_m = geometry_.DepthFromDisparity(d);
+  result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
 }
 
 void RangingPipeline::AddModelUncertainty(RangeResult* result) const {

@@ -20,6 +20,11 @@ TEST(RangingPipelineOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
   EXPECT_THROW(o.Check(), OptionError);
   o.model_relative_sigma = 0.0;
   EXPECT_NO_THROW(o.Check());
+  o.surface_refinement = 3;
+  EXPECT_THROW(o.Check(), OptionError);
+  o.surface_refinement = 2;
+  o.surface.min_pixels = 2;
+  EXPECT_THROW(o.Check(), OptionError);
 }
 
 // A rendered damper at 2 m ranged through the whole chain (rectify, isgm, ranging) with the true
@@ -63,6 +68,20 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   const double truth = scene.obstacles.front().distance_m;
   EXPECT_NEAR(r.distance_m, truth, 0.015 * truth);
   EXPECT_GE(r.sigma_m, options.model_relative_sigma * r.distance_m);
+  EXPECT_FALSE(r.refined);  // off by default
+
+  // The same frame with the front surface refined on the images: the damper's textured end cap
+  // refines (NCC above the gate) and stays within 1.5 %; sigma grows by the refinement's terms.
+  RangingPipelineOptions refining = options;
+  refining.surface_refinement = 2;
+  const RangingPipeline refiner(sim::MakeStereoCalibration(scene_options.rig), refining);
+  const RangeResult rr = refiner.RangeRois(frame, {roi}).front();
+  ASSERT_TRUE(rr.ok()) << rr.reason;
+  EXPECT_TRUE(rr.refined);
+  EXPECT_EQ(rr.matched_disparity_px, r.disparity_px);
+  EXPECT_NE(rr.disparity_px, r.disparity_px);
+  EXPECT_NEAR(rr.distance_m, truth, 0.015 * truth);
+  EXPECT_GE(rr.sigma_m, r.sigma_m);
 }
 
 }  // namespace

@@ -66,6 +66,8 @@ void RangingOptions::Check() const {
               "RangingOptions.smoothing_radius_px", smoothing_radius_px, "must be in [0, 15]");
   CheckOption(near_percentile >= 0.5 && near_percentile <= 1.0, "RangingOptions.near_percentile",
               near_percentile, "must be in [0.5, 1]");
+  CheckOption(surface_band_relative > 0.0 && surface_band_relative <= 0.2,
+              "RangingOptions.surface_band_relative", surface_band_relative, "must be in (0, 0.2]");
   CheckOption(disparity_sigma_floor_px >= 0.0, "RangingOptions.disparity_sigma_floor_px",
               disparity_sigma_floor_px, "must be >= 0");
   CheckOption(correlation_length_px >= 1.0, "RangingOptions.correlation_length_px",
@@ -318,6 +320,7 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   const int r = options.smoothing_radius_px;
   const int noise_radius = std::max(4, r);
   std::vector<float> smoothed_values, all_smoothed_values, residuals, window;
+  std::vector<cv::Point> smoothed_points;  // image coordinates of smoothed_values
   smoothed_values.reserve(size_t(m));
   residuals.reserve(size_t(m));
   auto local_median = [&](int x, int y, int radius) {
@@ -334,7 +337,10 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
       if (!obstacle.at<uchar>(y, x)) continue;
       residuals.push_back(view.at<float>(y, x) - local_median(x, y, noise_radius));
       all_smoothed_values.push_back(r == 0 ? view.at<float>(y, x) : local_median(x, y, r));
-      if (interior.at<uchar>(y, x)) smoothed_values.push_back(all_smoothed_values.back());
+      if (interior.at<uchar>(y, x)) {
+        smoothed_values.push_back(all_smoothed_values.back());
+        smoothed_points.push_back({roi.x + x, roi.y + y});
+      }
     }
   }
 
@@ -366,7 +372,17 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
                 quantile_error * quantile_error + tail_step * tail_step +
                 silhouette_shift * silhouette_shift);
   result.disparity_px = d_near;
+  result.matched_disparity_px = d_near;
   result.disparity_sigma_px = sigma_d;
+  const double surface_floor = (1.0 - options.surface_band_relative) * (d_near + offset) - offset;
+  double surface_sum = 0.0;
+  for (size_t i = 0; i < smoothed_values.size(); ++i) {
+    if (smoothed_values[i] < surface_floor) continue;
+    result.surface_pixels.push_back(smoothed_points[i]);
+    surface_sum += smoothed_values[i];
+  }
+  result.surface_disparity_px =
+      surface_sum / double(std::max<size_t>(1, result.surface_pixels.size()));
   result.distance_m = geometry.DepthFromDisparity(d_near);
   result.sigma_m = geometry.DepthSigma(result.distance_m, sigma_d);
   result.median_distance_m = geometry.DepthFromDisparity(Median(obstacle_values));
@@ -392,6 +408,9 @@ nlohmann::json RangeResultToJson(const RangeResult& result) {
     j["disparity_px"] = result.disparity_px;
     j["disparity_sigma_px"] = result.disparity_sigma_px;
     j["median_distance_m"] = result.median_distance_m;
+    j["surface_pixels"] = result.surface_pixels.size();
+    j["refined"] = result.refined;
+    j["matched_disparity_px"] = result.matched_disparity_px;
   } else {
     j["status"] = "no_measurement";
     j["reason"] = result.reason;

@@ -77,6 +77,10 @@ struct RangingOptions {
   // silhouette margin and the checked disparities the near tail is clean (eval ranging: 0.95 put
   // the insulator's thin shed rims 1.7 % too far, 0.99 1.1 %).
   double near_percentile = 0.99;
+  // The obstacle's nearest surface as a pixel set (RangeResult::surface_pixels, what
+  // RefineSurfaceDisparity matches): interior pixels whose smoothed disparity is at least
+  // (1 - surface_band_relative) * d_near, i.e. within this relative depth of the nearest point.
+  double surface_band_relative = 0.01;
   // Floor of the disparity uncertainty (px): matching bias that no residual reveals (subpixel
   // locking, foreshortening).
   double disparity_sigma_floor_px = 0.05;
@@ -101,6 +105,14 @@ struct RangeResult {
   double disparity_px = 0.0;        // d_near
   double disparity_sigma_px = 0.0;  // uncertainty of d_near
   double median_distance_m = 0.0;   // depth of the obstacle mode's median disparity (its "centre")
+  // The nearest surface (see RangingOptions::surface_band_relative), image coordinates, and the
+  // mean of its smoothed disparities.
+  std::vector<cv::Point> surface_pixels;
+  double surface_disparity_px = 0.0;
+  // Set by RangingPipeline when the front surface was refined on the images
+  // (RefineSurfaceDisparity): the disparity from the matched map alone, before the refinement.
+  bool refined = false;
+  double matched_disparity_px = 0.0;
 
   bool ok() const { return status == RangeStatus::kOk; }
 };

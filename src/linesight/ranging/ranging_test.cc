@@ -29,6 +29,8 @@ TEST(RangingOptionsTest, Boundaries) {
   EXPECT_THROW((RangingOptions{.silhouette_margin_y_px = 16}.Check()), OptionError);
   EXPECT_NO_THROW(
       (RangingOptions{.silhouette_margin_x_px = 0, .silhouette_margin_y_px = 0}.Check()));
+  EXPECT_THROW((RangingOptions{.surface_band_relative = 0.0}.Check()), OptionError);
+  EXPECT_THROW((RangingOptions{.surface_band_relative = 0.25}.Check()), OptionError);
 }
 
 TEST(DisparityRangeTest, CoversTheWorkingRange) {
@@ -95,6 +97,14 @@ TEST(RangingTest, NoisefreeFlatTargetIsExact) {
               1e-12);  // obstacle and background are valid
   // Noise-free: sigma is the floor only.
   EXPECT_NEAR(r.sigma_m, g.DepthSigma(2.5, RangingOptions{}.disparity_sigma_floor_px), 1e-9);
+  // The nearest surface is the target's interior (the silhouette margin left out), at its
+  // disparity; the background at 3.5 m inside the ROI is not part of it.
+  EXPECT_NEAR(r.surface_disparity_px, g.DisparityFromDepth(2.5), 1e-4);
+  EXPECT_EQ(r.matched_disparity_px, r.disparity_px);
+  EXPECT_FALSE(r.refined);
+  ASSERT_GT(r.surface_pixels.size(), 1000u);
+  const cv::Rect interior(100 + 4, 80 + 3, 60 - 8, 50 - 6);
+  for (const cv::Point& p : r.surface_pixels) ASSERT_TRUE(interior.contains(p)) << p;
 }
 
 // Sphere in front of a background plane with a conductor crossing the ROI and correlated matching

@@ -1,0 +1,178 @@
+#include "linesight/ranging/surface_refinement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/error.h"
+
+namespace linesight {
+
+void SurfaceRefinementOptions::Check() const {
+  CheckOption(search_px >= 0.0 && search_px <= 16.0, "SurfaceRefinementOptions.search_px",
+              search_px, "must be in [0, 16]");
+  CheckOption(search_relative >= 0.0 && search_relative <= 0.2,
+              "SurfaceRefinementOptions.search_relative", search_relative, "must be in [0, 0.2]");
+  CheckOption(step_px > 0.0 && step_px <= 0.5, "SurfaceRefinementOptions.step_px", step_px,
+              "must be in (0, 0.5]");
+  CheckOption(min_pixels >= 3, "SurfaceRefinementOptions.min_pixels", min_pixels, "must be >= 3");
+  CheckOption(min_ncc >= -1.0 && min_ncc < 1.0, "SurfaceRefinementOptions.min_ncc", min_ncc,
+              "must be in [-1, 1)");
+}
+
+namespace {
+
+cv::Mat ToGrayFloat(const cv::Mat& image) {
+  cv::Mat gray;
+  if (image.channels() == 3) {
+    cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  } else if (image.channels() == 1) {
+    gray = image;
+  } else {
+    throw InputError(
+        fmt::format("expected a grey or BGR image, got {} channels", image.channels()));
+  }
+  cv::Mat out;
+  gray.convertTo(out, CV_32F);
+  return out;
+}
+
+// Keys cubic convolution (a = -0.5) weights for the taps at -1, 0, 1, 2 around t in [0, 1).
+void CubicWeights(double t, double w[4]) {
+  const double a = -0.5;
+  auto near = [&](double s) { return ((a + 2) * s - (a + 3)) * s * s + 1; };       // |s| <= 1
+  auto far = [&](double s) { return ((a * s - 5 * a) * s + 8 * a) * s - 4 * a; };  // 1 < |s| < 2
+  w[0] = far(1 + t);
+  w[1] = near(t);
+  w[2] = near(1 - t);
+  w[3] = far(2 - t);
+}
+
+// R at x along the row (taps row[i - 1 .. i + 2], i = floor(x), must exist).
+double SampleRow(const float* row, double x) {
+  const int i = int(std::floor(x));
+  double w[4];
+  CubicWeights(x - i, w);
+  double value = 0;
+  for (int k = 0; k < 4; ++k) value += w[k] * row[i - 1 + k];
+  return value;
+}
+
+double Ncc(const std::vector<double>& l, const std::vector<double>& r) {
+  const size_t n = l.size();
+  double ml = 0, mr = 0;
+  for (size_t i = 0; i < n; ++i) ml += l[i], mr += r[i];
+  ml /= double(n);
+  mr /= double(n);
+  double sll = 0, srr = 0, slr = 0;
+  for (size_t i = 0; i < n; ++i) {
+    sll += (l[i] - ml) * (l[i] - ml);
+    srr += (r[i] - mr) * (r[i] - mr);
+    slr += (l[i] - ml) * (r[i] - mr);
+  }
+  if (sll <= 0 || srr <= 0) return -1.0;
+  return slr / std::sqrt(sll * srr);
+}
+
+}  // namespace
+
+SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& right,
+                                         const std::vector<cv::Point>& pixels, double d0,
+                                         const SurfaceRefinementOptions& options) {
+  options.Check();
+  if (left.empty() || right.empty()) throw InputError("surface refinement: empty image");
+  if (left.size() != right.size()) {
+    throw InputError(fmt::format("surface refinement: left {}x{} and right {}x{} differ", left.cols,
+                                 left.rows, right.cols, right.rows));
+  }
+  SurfaceRefinement out;
+  const double w = options.search_px + options.search_relative * std::abs(d0);
+  const int steps = int(std::ceil(w / options.step_px));
+  const double d_min = d0 - steps * options.step_px, d_max = d0 + steps * options.step_px;
+  // Only the rows S covers are converted.
+  int y0 = left.rows, y1 = -1;
+  for (const cv::Point& p : pixels) y0 = std::min(y0, p.y), y1 = std::max(y1, p.y);
+  if (y1 < y0) {
+    out.reason = "no surface pixels";
+    return out;
+  }
+  const cv::Mat l = ToGrayFloat(left.rowRange(y0, y1 + 1));
+  const cv::Mat r = ToGrayFloat(right.rowRange(y0, y1 + 1));
+  // Usable pixels: inside the image, and their match at every searched d inside the right image
+  // with the interpolation taps.
+  std::vector<cv::Point> used;
+  std::vector<double> lv;
+  for (const cv::Point& p : pixels) {
+    if (p.x < 0 || p.x >= left.cols || p.y < 0 || p.y >= left.rows) continue;
+    if (p.x - d_max - 0.5 < 1.0 || p.x - d_min + 0.5 >= double(right.cols) - 2.0) continue;
+    used.push_back({p.x, p.y - y0});
+    lv.push_back(l.at<float>(p.y - y0, p.x));
+  }
+  out.pixels = int(used.size());
+  if (out.pixels < options.min_pixels) {
+    out.reason =
+        fmt::format("only {} surface pixels can be matched inside the right image; need {}",
+                    out.pixels, options.min_pixels);
+    return out;
+  }
+  std::vector<double> rv(used.size());
+  auto ncc_at = [&](double d) {
+    for (size_t i = 0; i < used.size(); ++i)
+      rv[i] = SampleRow(r.ptr<float>(used[i].y), used[i].x - d);
+    return Ncc(lv, rv);
+  };
+  std::vector<double> scores(size_t(2 * steps + 1));
+  int best = 0;
+  for (int k = 0; k <= 2 * steps; ++k) {
+    scores[size_t(k)] = ncc_at(d_min + k * options.step_px);
+    if (scores[size_t(k)] > scores[size_t(best)]) best = k;
+  }
+  if (best == 0 || best == 2 * steps) {
+    out.reason = fmt::format("the correlation peaks at the edge of the search {:.2f}..{:.2f} px",
+                             d_min, d_max);
+    return out;
+  }
+  // Parabola through the best grid point and its neighbours, then the peak itself.
+  const double a = scores[size_t(best - 1)], b = scores[size_t(best)], c = scores[size_t(best + 1)];
+  const double denom = a - 2 * b + c;
+  const double shift = denom < 0 ? std::clamp(0.5 * (a - c) / denom, -0.5, 0.5) : 0.0;
+  out.disparity_px = d_min + (best + shift) * options.step_px;
+  out.ncc = ncc_at(out.disparity_px);
+  if (!(out.ncc >= options.min_ncc)) {
+    out.reason =
+        fmt::format("the correlation peak {:.2f} is below {:.2f}: not one textured surface",
+                    out.ncc, options.min_ncc);
+    return out;
+  }
+  // Noise: residual of the affine fit L = alpha + beta R at the peak, against sum of (beta
+  // dR/dx)^2.
+  double ml = 0, mr = 0;
+  for (size_t i = 0; i < used.size(); ++i) ml += lv[i], mr += rv[i];
+  ml /= double(used.size());
+  mr /= double(used.size());
+  double srr = 0, slr = 0;
+  for (size_t i = 0; i < used.size(); ++i) {
+    srr += (rv[i] - mr) * (rv[i] - mr);
+    slr += (lv[i] - ml) * (rv[i] - mr);
+  }
+  const double beta = srr > 0 ? slr / srr : 1.0;
+  double see = 0, sgg = 0;
+  for (size_t i = 0; i < used.size(); ++i) {
+    const double e = (lv[i] - ml) - beta * (rv[i] - mr);
+    see += e * e;
+    const float* row = r.ptr<float>(used[i].y);
+    const double x = used[i].x - out.disparity_px;
+    // dR/dx: central difference of the interpolant over one pixel.
+    const double g = SampleRow(row, x + 0.5) - SampleRow(row, x - 0.5);
+    sgg += beta * beta * g * g;
+  }
+  const double sigma_e = std::sqrt(see / double(std::max<size_t>(1, used.size() - 2)));
+  out.sigma_px = sgg > 0 ? sigma_e / std::sqrt(sgg) : std::numeric_limits<double>::infinity();
+  out.ok = true;
+  return out;
+}
+
+}  // namespace linesight
