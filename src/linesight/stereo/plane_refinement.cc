@@ -1,6 +1,7 @@
 #include "linesight/stereo/plane_refinement.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -123,48 +124,69 @@ int CountInliers(const ScoringSample& sample, const DisparityPlane& plane, doubl
                            plane, threshold);
 }
 
+// The points of one fit in double precision, with each point's terms of the normal equations about
+// the fit's origin computed once (every refit adds the same terms of its inliers).
+struct FitPoints {
+  std::vector<double> x, y, d;
+  std::vector<std::array<double, 9>> terms;  // x x, x y, y y, x, y, 1, x d, y d, d (relative)
+  void Set(const std::vector<PlanePoint>& points, double ox, double oy) {
+    const size_t n = points.size();
+    x.resize(n);
+    y.resize(n);
+    d.resize(n);
+    terms.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      x[i] = points[i].x;
+      y[i] = points[i].y;
+      d[i] = points[i].d;
+      const double rx = points[i].x - ox, ry = points[i].y - oy, rd = points[i].d;
+      terms[i] = {rx * rx, rx * ry, ry * ry, rx, ry, 1.0, rx * rd, ry * rd, rd};
+    }
+  }
+};
+
 // MarkInliers and AccumulateNormalEquations over the marked points in one pass, branch-free (the
-// inlier test is unpredictable on noisy segments): every point adds its terms times 1 or 0, which
-// gives the same sums in the same order as adding the inliers only.
-// Also returns the sum of squared inlier residuals (as MarkInliers sums them) in *squares.
-int MarkAndAccumulateInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
-                             double threshold, double ox, double oy, std::vector<uint8_t>* mask,
-                             PlaneNormalEquations* equations, double* squares) {
-  mask->resize(points.size());
+// inlier test is unpredictable on noisy segments): every point adds its terms or 0, which gives the
+// same sums in the same order as adding the inliers only. Also returns the sum of squared inlier
+// residuals (as MarkInliers sums them) in *squares.
+int MarkAndAccumulateInliers(const FitPoints& points, const DisparityPlane& plane, double threshold,
+                             std::vector<uint8_t>* mask, PlaneNormalEquations* equations,
+                             double* squares) {
+  const size_t n = points.x.size();
+  mask->resize(n);
   uint8_t* marks = mask->data();
-  PlaneNormalEquations e;
+  double sums[9] = {};
   int count = 0;
   double sum_squares = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const PlanePoint& p = points[i];
-    const double r = plane.At(p.x, p.y) - p.d;
+  for (size_t i = 0; i < n; ++i) {
+    const double r = plane.At(points.x[i], points.y[i]) - points.d[i];
     const bool inlier = std::abs(r) <= threshold;
     marks[i] = inlier;
     count += inlier;
-    const double w = inlier ? 1.0 : 0.0;
-    sum_squares += w * (r * r);
-    const double x = p.x - ox, y = p.y - oy, d = p.d;
-    e.sxx += w * (x * x), e.sxy += w * (x * y), e.syy += w * (y * y);
-    e.sx += w * x, e.sy += w * y, e.n += w;
-    e.sxd += w * (x * d), e.syd += w * (y * d), e.sd += w * d;
+    sum_squares += inlier ? r * r : 0.0;
+    const std::array<double, 9>& t = points.terms[i];
+    for (int k = 0; k < 9; ++k) sums[k] += inlier ? t[k] : 0.0;
   }
-  *equations = e;
+  PlaneNormalEquations& e = *equations;
+  e.sxx = sums[0], e.sxy = sums[1], e.syy = sums[2], e.sx = sums[3], e.sy = sums[4], e.n = sums[5];
+  e.sxd = sums[6], e.syd = sums[7], e.sd = sums[8];
   *squares = sum_squares;
   return count;
 }
 
-int MarkInliers(const std::vector<PlanePoint>& points, const DisparityPlane& plane,
-                double threshold, std::vector<uint8_t>* mask, double* rms) {
-  mask->resize(points.size());
+int MarkInliers(const FitPoints& points, const DisparityPlane& plane, double threshold,
+                std::vector<uint8_t>* mask, double* rms) {
+  const size_t n = points.x.size();
+  mask->resize(n);
   uint8_t* marks = mask->data();
   int count = 0;
   double squares = 0;
-  for (size_t i = 0; i < points.size(); ++i) {  // branch-free, as MarkAndAccumulateInliers
-    const double r = plane.At(points[i].x, points[i].y) - points[i].d;
+  for (size_t i = 0; i < n; ++i) {  // branch-free, as MarkAndAccumulateInliers
+    const double r = plane.At(points.x[i], points.y[i]) - points.d[i];
     const bool inlier = std::abs(r) <= threshold;
     marks[i] = inlier;
     count += inlier;
-    squares += (inlier ? 1.0 : 0.0) * (r * r);
+    squares += inlier ? r * r : 0.0;
   }
   *rms = count > 0 ? std::sqrt(squares / count) : 0.0;
   return count;
@@ -320,12 +342,14 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
   // inliers as the previous one it would reproduce the same plane: the remaining refits are
   // skipped (the result is the same as running them all).
   thread_local std::vector<uint8_t> previous_mask;
+  thread_local FitPoints fit_points;
+  fit_points.Set(points, ox, oy);
   int count = 0;
   double squares = 0;
   bool marked_best = false;  // inlier_mask, count and squares belong to `best`
   for (int it = 0; it < options.refit_iterations; ++it) {
     PlaneNormalEquations equations;
-    count = MarkAndAccumulateInliers(points, best, threshold, ox, oy, &fit->inlier_mask, &equations,
+    count = MarkAndAccumulateInliers(fit_points, best, threshold, &fit->inlier_mask, &equations,
                                      &squares);
     marked_best = true;
     if (count < 3) break;
@@ -343,7 +367,7 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
     fit->inliers = count;
     fit->residual_rms = count > 0 ? std::sqrt(squares / count) : 0.0;
   } else {
-    fit->inliers = MarkInliers(points, best, threshold, &fit->inlier_mask, &fit->residual_rms);
+    fit->inliers = MarkInliers(fit_points, best, threshold, &fit->inlier_mask, &fit->residual_rms);
   }
   return true;
 }
