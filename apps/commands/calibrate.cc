@@ -76,12 +76,19 @@ int RunCalibrate(int argc, char** argv) {
          "--recon-board-bend,!--no-recon-board-bend", options.recon_board_bend,
          "recon: estimate the board's quadratic out-of-plane bend instead of assuming it flat")
       ->capture_default_str();
+  std::string recon_noise = "view";
+  app.add_option(
+         "--recon-noise", recon_noise,
+         "recon: corner-noise model of the whitening: iid, camera (one level per camera) or "
+         "view (one per camera and view), levels estimated from the residuals")
+      ->capture_default_str();
   app.add_option("--min-views", options.min_views, "fewest views per camera and pair views (>= 3)")
       ->capture_default_str();
   return RunCommand(app, argc, argv, [&] {
     // Everything that can fail on the input is checked before anything is written.
     const calib::PatternSpec spec = calib::ParsePatternSpec(pattern_text);
     options.method = calib::ParseMethod(method_name);
+    options.recon_noise = calib::ParseReconNoise(recon_noise);
     if (detector != "sb" && detector != "classic") {
       throw UsageError(fmt::format("--detector '{}': expected sb or classic", detector));
     }

@@ -55,10 +55,14 @@ int RunEvalCalibration(int argc, char** argv) {
   app.add_flag("--recon-board-bend,!--no-recon-board-bend", options.calibration.recon_board_bend,
                "recon: estimate the board's quadratic bend (the simulated board is flat)")
       ->capture_default_str();
+  std::string recon_noise = "view";
+  app.add_option("--recon-noise", recon_noise, "recon: corner-noise model: iid, camera or view")
+      ->capture_default_str();
   app.add_option("--json", json_path, "JSON report (- for stdout)");
   app.add_option("--csv", csv_path, "CSV table");
   app.add_option("--plots", plots_dir, "write calibration_{noise,images}_{rms,mae}.svg here");
   return RunCommand(app, argc, argv, [&] {
+    options.calibration.recon_noise = calib::ParseReconNoise(recon_noise);
     options.methods.clear();
     for (const std::string& name : method_names)
       options.methods.push_back(calib::ParseMethod(name));

@@ -186,7 +186,7 @@ void TriangulateMidpointT(const T* left_normalized, const T* right_normalized,
 template <typename T>
 bool ReconCornerWhitening(const T* left_intrinsics, const T* right_intrinsics,
                           const T* right_from_left, const T* left_normalized,
-                          const T* right_normalized, T* l, T* b) {
+                          const T* right_normalized, const double noise[2], T* l, T* b) {
   constexpr double kStep = 1e-6;  // in normalised coordinates (~1e-3 px)
   // Pixel -> normalised Jacobians: inverse of f·∂distort/∂n at the undistorted point.
   T normalized_from_pixel[2][2][2];  // [camera][row][col]
@@ -236,8 +236,9 @@ bool ReconCornerWhitening(const T* left_intrinsics, const T* right_intrinsics,
     for (int camera = 0; camera < 2; ++camera) {
       for (int k = 0; k < 2; ++k) {
         a[r][2 * camera + k] =
-            point_from_normalized[r][2 * camera] * normalized_from_pixel[camera][0][k] +
-            point_from_normalized[r][2 * camera + 1] * normalized_from_pixel[camera][1][k];
+            (point_from_normalized[r][2 * camera] * normalized_from_pixel[camera][0][k] +
+             point_from_normalized[r][2 * camera + 1] * normalized_from_pixel[camera][1][k]) *
+            T(noise[camera]);
       }
     }
   }
@@ -286,12 +287,14 @@ bool ReconCornerWhitening(const T* left_intrinsics, const T* right_intrinsics,
 // determined direction (fx −1 % at σ = 0.5 px in the simulation).
 struct ReconCornerResidual {
   ReconCornerResidual(const Eigen::Vector2d& left_pixel, const Eigen::Vector2d& right_pixel,
-                      const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv, double weight)
+                      const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv, double weight,
+                      double left_noise = 1.0, double right_noise = 1.0)
       : left_pixel_(left_pixel),
         right_pixel_(right_pixel),
         board_point_(board_point),
         uv_(uv),
-        weight_(weight) {}
+        weight_(weight),
+        noise_{left_noise, right_noise} {}
 
   template <typename T>
   bool operator()(const T* left_intrinsics, const T* right_intrinsics, const T* left_from_board,
@@ -303,16 +306,18 @@ struct ReconCornerResidual {
     TransformPoint(right_from_left, left, right);
     if (!Project(left_intrinsics, left, left_predicted)) return false;
     if (!Project(right_intrinsics, right, right_predicted)) return false;
-    const T e[4] = {left_predicted[0] - T(left_pixel_.x()), left_predicted[1] - T(left_pixel_.y()),
-                    right_predicted[0] - T(right_pixel_.x()),
-                    right_predicted[1] - T(right_pixel_.y())};
+    // Residuals in units of each camera's pixel noise (relative scales noise_, 1 = i.i.d.).
+    const T e[4] = {(left_predicted[0] - T(left_pixel_.x())) / noise_[0],
+                    (left_predicted[1] - T(left_pixel_.y())) / noise_[0],
+                    (right_predicted[0] - T(right_pixel_.x())) / noise_[1],
+                    (right_predicted[1] - T(right_pixel_.y())) / noise_[1]};
     T left_normalized[2], right_normalized[2], triangulated[3];
     PixelToNormalized(left_intrinsics, left_pixel_, left_normalized);
     PixelToNormalized(right_intrinsics, right_pixel_, right_normalized);
     TriangulateMidpointT(left_normalized, right_normalized, right_from_left, triangulated);
     T l[9], b[12];
     if (!ReconCornerWhitening(left_intrinsics, right_intrinsics, right_from_left, left_normalized,
-                              right_normalized, l, b)) {
+                              right_normalized, noise_, l, b)) {
       return false;
     }
     // (I − c·BᵀB)·e
@@ -340,16 +345,19 @@ struct ReconCornerResidual {
   static ceres::CostFunction* Create(const Eigen::Vector2d& left_pixel,
                                      const Eigen::Vector2d& right_pixel,
                                      const Eigen::Vector3d& board_point, const Eigen::Vector2d& uv,
-                                     double weight) {
+                                     double weight, double left_noise = 1.0,
+                                     double right_noise = 1.0) {
     return new ceres::AutoDiffCostFunction<ReconCornerResidual, 7, kNumIntrinsics, kNumIntrinsics,
                                            kPoseSize, kPoseSize, kBoardBendSize>(
-        new ReconCornerResidual(left_pixel, right_pixel, board_point, uv, weight));
+        new ReconCornerResidual(left_pixel, right_pixel, board_point, uv, weight, left_noise,
+                                right_noise));
   }
 
   Eigen::Vector2d left_pixel_, right_pixel_;
   Eigen::Vector3d board_point_;
   Eigen::Vector2d uv_;
   double weight_;
+  double noise_[2];
 };
 
 // recon: scaled error of the distance between two triangulated adjacent corners.

@@ -127,8 +127,11 @@ Pose MeanRightFromLeft(const std::vector<Pose>& per_view) {
 }
 
 // The joint refinement of zhang and recon (see the header for the objective).
+// noise[v] = relative pixel-noise scales (left, right) of view v (empty: all 1): every recon
+// residual of that camera is divided by it.
 void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& options,
-                 bool recon_terms, StereoCalibrationResult* result) {
+                 bool recon_terms, const std::vector<std::array<double, 2>>& noise,
+                 StereoCalibrationResult* result) {
   const bool recon_corners = recon_terms && options.recon_point_weight > 0;
   const bool recon_distances = recon_terms && options.recon_distance_weight > 0;
   ceres::Problem problem;
@@ -148,11 +151,17 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
   const std::vector<Eigen::Vector2d> uv = BoardBendCoordinates(board);
   const double f0 = result->left.fx();
   // One camera's reprojection term, on the bent board for recon.
+  const auto noise_of = [&](size_t v, int camera) {
+    return noise.empty() ? 1.0 : noise[v][camera];
+  };
   const auto add_reprojection = [&](const Eigen::Vector2d& pixel, int id, double* intrinsics,
-                                    double* pose) {
+                                    double* pose, double scale) {
     if (recon_terms) {
       problem.AddResidualBlock(BentReprojectionResidual::Create(pixel, board.points[id], uv[id]),
-                               nullptr, intrinsics, pose, bend);
+                               scale == 1.0 ? nullptr
+                                            : new ceres::ScaledLoss(nullptr, 1.0 / (scale * scale),
+                                                                    ceres::TAKE_OWNERSHIP),
+                               intrinsics, pose, bend);
     } else {
       problem.AddResidualBlock(ReprojectionResidual::Create(pixel, board.points[id]), nullptr,
                                intrinsics, pose);
@@ -178,24 +187,28 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
       for (size_t k = 0; k < left.ids.size() && recon_corners; ++k) {
         const auto it = common.find(left.ids[k]);
         if (it == common.end()) continue;
-        problem.AddResidualBlock(ReconCornerResidual::Create(
-                                     left.pixels[k], it->second.second, board.points[left.ids[k]],
-                                     uv[left.ids[k]], options.recon_point_weight),
-                                 nullptr, left_intrinsics, right_intrinsics, pose, right_from_left,
-                                 bend);
+        problem.AddResidualBlock(
+            ReconCornerResidual::Create(left.pixels[k], it->second.second,
+                                        board.points[left.ids[k]], uv[left.ids[k]],
+                                        options.recon_point_weight, noise_of(v, 0), noise_of(v, 1)),
+            nullptr, left_intrinsics, right_intrinsics, pose, right_from_left, bend);
         as_recon_corner.insert(left.ids[k]);
       }
       for (size_t k = 0; k < left.ids.size(); ++k) {
         if (as_recon_corner.count(left.ids[k])) continue;
-        add_reprojection(left.pixels[k], left.ids[k], left_intrinsics, pose);
+        add_reprojection(left.pixels[k], left.ids[k], left_intrinsics, pose, noise_of(v, 0));
       }
       for (size_t k = 0; k < right.ids.size(); ++k) {
         if (as_recon_corner.count(right.ids[k])) continue;
         const int id = right.ids[k];
         if (recon_terms) {
+          const double scale = noise_of(v, 1);
           problem.AddResidualBlock(
               BentStereoReprojectionResidual::Create(right.pixels[k], board.points[id], uv[id]),
-              nullptr, right_intrinsics, pose, right_from_left, bend);
+              scale == 1.0
+                  ? nullptr
+                  : new ceres::ScaledLoss(nullptr, 1.0 / (scale * scale), ceres::TAKE_OWNERSHIP),
+              right_intrinsics, pose, right_from_left, bend);
         } else {
           problem.AddResidualBlock(
               StereoReprojectionResidual::Create(right.pixels[k], board.points[id]), nullptr,
@@ -205,7 +218,7 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
     } else if (!right.empty() && result->right_only_from_board[v]) {
       double* pose = result->right_only_from_board[v]->params.data();
       for (size_t k = 0; k < right.ids.size(); ++k)
-        add_reprojection(right.pixels[k], right.ids[k], right_intrinsics, pose);
+        add_reprojection(right.pixels[k], right.ids[k], right_intrinsics, pose, noise_of(v, 1));
     }
     if (!recon_distances || !obs.IsPair(v) || !result->left_from_board[v]) continue;
     const Pose& left_from_board = *result->left_from_board[v];
@@ -228,6 +241,9 @@ void RefineJoint(const StereoObservations& obs, const StereoCalibrationOptions& 
   ceres::Solver::Summary summary;
   ceres::Solve(SolverOptions(options), &problem, &summary);
 }
+
+// recon's noise-model rounds: estimate the levels from the residuals, refine again.
+constexpr int kNoiseRounds = 2;
 
 // Refines one board pose with everything else fixed (used after OpenCV's calibration).
 void RefinePoseOnly(const BoardGeometry& board, const ViewObservations* view_a,
@@ -360,6 +376,26 @@ std::string MethodName(CalibrationMethod method) {
       return "opencv";
   }
   return "?";
+}
+
+std::string ReconNoiseName(ReconNoiseModel model) {
+  switch (model) {
+    case ReconNoiseModel::kIid:
+      return "iid";
+    case ReconNoiseModel::kCamera:
+      return "camera";
+    case ReconNoiseModel::kView:
+      return "view";
+  }
+  return "?";
+}
+
+ReconNoiseModel ParseReconNoise(const std::string& name) {
+  if (name == "iid") return ReconNoiseModel::kIid;
+  if (name == "camera") return ReconNoiseModel::kCamera;
+  if (name == "view") return ReconNoiseModel::kView;
+  throw UsageError(
+      fmt::format("unknown recon noise model '{}' (expected iid, camera or view)", name));
 }
 
 CalibrationMethod ParseMethod(const std::string& name) {
@@ -503,8 +539,89 @@ StereoCalibrationResult CalibrateStereo(const StereoObservations& obs,
       result.right_only_from_board[v] = right.poses[v];
     }
   }
-  RefineJoint(obs, options, options.method == CalibrationMethod::kRecon, &result);
+  const bool recon = options.method == CalibrationMethod::kRecon;
+  RefineJoint(obs, options, recon, {}, &result);
+  if (recon && options.recon_noise != ReconNoiseModel::kIid) {
+    for (int round = 0; round < kNoiseRounds; ++round) {
+      RefineJoint(obs, options, true, EstimateReconNoiseScales(obs, result, options.recon_noise),
+                  &result);
+    }
+  }
   return result;
+}
+
+std::vector<std::array<double, 2>> EstimateReconNoiseScales(const StereoObservations& obs,
+                                                            const StereoCalibrationResult& est,
+                                                            ReconNoiseModel model) {
+  const BoardGeometry board = BendBoard(obs.board, est.board_bend);
+  std::vector<std::array<double, 2>> sum2(obs.size(), {0.0, 0.0}), dof(obs.size(), {0.0, 0.0});
+  for (size_t v = 0; v < obs.size(); ++v) {
+    for (int camera = 0; camera < 2; ++camera) {
+      const ViewObservations& view = camera == 0 ? obs.left[v] : obs.right[v];
+      if (view.empty()) continue;
+      std::optional<Pose> pose;
+      const CameraIntrinsics& intrinsics = camera == 0 ? est.left : est.right;
+      if (est.left_from_board[v]) {
+        pose =
+            camera == 0 ? *est.left_from_board[v] : est.right_from_left * *est.left_from_board[v];
+      } else if (camera == 1) {
+        pose = est.right_only_from_board[v];
+      }
+      if (!pose) continue;
+      for (size_t k = 0; k < view.ids.size(); ++k) {
+        const Eigen::Vector3d p = pose->Apply(board.points[view.ids[k]]);
+        double pixel[2];
+        if (!Project(intrinsics.params.data(), p.data(), pixel)) continue;
+        sum2[v][camera] += (Eigen::Vector2d(pixel[0], pixel[1]) - view.pixels[k]).squaredNorm();
+        dof[v][camera] += 2;
+      }
+      dof[v][camera] -= obs.IsPair(v) ? 3 : 6;
+    }
+  }
+  // Groups: one per camera (kCamera) or per camera and view (kView); group g of (v, c).
+  const auto group_of = [&](size_t v, int c) {
+    return model == ReconNoiseModel::kCamera ? static_cast<size_t>(c) : 2 * v + c;
+  };
+  const size_t group_count = model == ReconNoiseModel::kCamera ? 2 : 2 * obs.size();
+  std::vector<double> group_sum(group_count, 0.0), group_dof(group_count, 0.0);
+  double pooled_sum = 0, pooled_dof = 0;
+  for (size_t v = 0; v < obs.size(); ++v) {
+    for (int c = 0; c < 2; ++c) {
+      if (dof[v][c] <= 0) continue;
+      group_sum[group_of(v, c)] += sum2[v][c];
+      group_dof[group_of(v, c)] += dof[v][c];
+      pooled_sum += sum2[v][c];
+      pooled_dof += dof[v][c];
+    }
+  }
+  std::vector<std::array<double, 2>> scales(obs.size(), {1.0, 1.0});
+  if (!(pooled_sum > 0) || model == ReconNoiseModel::kIid) return scales;
+  const double pooled = pooled_sum / pooled_dof;
+  // Empirical-Bayes shrinkage toward the pooled level: a group's s² scatters around its true
+  // variance with variance 2σ⁴/dof (χ²), so only the spread of the s² beyond that, τ², is
+  // real heteroscedasticity; each group keeps the share τ² / (τ² + 2·pooled²/dof) of its
+  // deviation. With i.i.d. noise τ² ≈ 0 and every scale stays ≈ 1 (no weights from sampling
+  // noise alone).
+  double spread = 0, sampling = 0;
+  int groups = 0;
+  for (size_t g = 0; g < group_count; ++g) {
+    if (group_dof[g] <= 0) continue;
+    const double s2 = group_sum[g] / group_dof[g];
+    spread += (s2 - pooled) * (s2 - pooled);
+    sampling += 2 * pooled * pooled / group_dof[g];
+    ++groups;
+  }
+  const double tau2 = groups > 1 ? std::max(0.0, (spread - sampling) / groups) : 0.0;
+  for (size_t v = 0; v < obs.size(); ++v) {
+    for (int c = 0; c < 2; ++c) {
+      const size_t g = group_of(v, c);
+      if (group_dof[g] <= 0) continue;
+      const double s2 = group_sum[g] / group_dof[g];
+      const double share = tau2 / (tau2 + 2 * pooled * pooled / group_dof[g]);
+      scales[v][c] = std::sqrt((pooled + share * (s2 - pooled)) / pooled);
+    }
+  }
+  return scales;
 }
 
 Pose AlignPointSets(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {

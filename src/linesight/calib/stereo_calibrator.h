@@ -44,12 +44,22 @@
 //                board points bent along the board normal by a shared quadratic
 //                b0·u² + b1·v² + b2·u·v (BendBoard; 3 parameters for all views) estimated with the
 //                rest; a printed board is not flat. The report then evaluates on the bent board.
+//                Corner-noise model (recon_noise, default kView): the whitening above assumes one
+//                pixel noise σ for every corner; real views differ (blur, distance, lighting:
+//                opencv-doc's per-view RMS spans 0.17 … 0.31 px). recon first solves with i.i.d.
+//                weights, then estimates a relative noise level per camera and view from the
+//                residuals (EstimateReconNoiseScales, shrunk toward the pooled level so that
+//                sampling scatter alone gives no weights), and solves again (2 rounds) with each
+//                camera's residuals and pixel covariance in the A·Σ·Aᵀ of its corners scaled
+//                by that level: the likelihood under heteroscedastic Gaussian noise. kIid is the
+//                previous objective; kCamera one level per camera.
 // opencv         cv::calibrateCamera per camera, then
 // cv::stereoCalibrate(CALIB_USE_INTRINSIC_GUESS) on
 //                the pair views; board poses are refined afterwards (pose only, OpenCV's parameters
 //                fixed) so that the report can evaluate every method the same way.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,6 +74,13 @@
 namespace linesight::calib {
 
 enum class CalibrationMethod { kZhang, kRecon, kOpenCV };
+
+// recon's corner-noise model: i.i.d. over all corners, one level per camera, or one per camera
+// and view (levels estimated from the residuals, see recon_noise in StereoCalibrationOptions).
+enum class ReconNoiseModel { kIid, kCamera, kView };
+std::string ReconNoiseName(ReconNoiseModel model);
+// "iid" | "camera" | "view"; throws UsageError otherwise.
+ReconNoiseModel ParseReconNoise(const std::string& name);
 std::string MethodName(CalibrationMethod method);
 // "zhang" | "recon" | "opencv"; throws UsageError otherwise.
 CalibrationMethod ParseMethod(const std::string& name);
@@ -109,6 +126,8 @@ struct StereoCalibrationOptions {
       0.0;  // w_d of the recon objective, >= 0 (biased under noise, see above)
   // recon: estimate the board's shared quadratic bend (BoardBend) instead of assuming it flat.
   bool recon_board_bend = false;
+  // recon: the pixel-noise model behind the whitening (kIid: every corner the same noise).
+  ReconNoiseModel recon_noise = ReconNoiseModel::kView;
 
   void Check() const;
 };
@@ -132,6 +151,18 @@ struct StereoCalibrationResult {
 // input.
 StereoCalibrationResult CalibrateStereo(const StereoObservations& observations,
                                         const StereoCalibrationOptions& options);
+
+// recon's relative pixel-noise scales (left, right) per view under a noise model, from the
+// reprojection residuals of an estimate (on its bent board): s² = Σ|e|² / (2n − d) per group (one
+// group per camera for kCamera, per camera and view for kView; d: the group's share of the pose
+// degrees of freedom, 3 per camera of a pair view, 6 for a single-camera view), shrunk toward the
+// pooled level by empirical Bayes and divided by it: s² scatters around the group's true variance
+// with variance 2σ⁴/dof (χ²), so only the spread beyond that, τ², is real heteroscedasticity and a
+// group keeps the share τ²/(τ² + 2σ̂⁴/dof) of its deviation. With i.i.d. noise τ² ≈ 0 and every
+// scale stays ≈ 1; kIid (or no residual) gives exactly 1. Views without an estimate get 1.
+std::vector<std::array<double, 2>> EstimateReconNoiseScales(const StereoObservations& obs,
+                                                            const StereoCalibrationResult& est,
+                                                            ReconNoiseModel model);
 
 // Right_from_left from two point sets (rows = points, same order): R, T minimising Σ|R·a + T − b|²,
 // with det(R) = +1 (Kabsch/Umeyama without scale).

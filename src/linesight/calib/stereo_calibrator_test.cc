@@ -48,6 +48,65 @@ TEST(ParseMethod, NamesRoundTrip) {
   EXPECT_THROW(ParseMethod("tsai"), UsageError);
 }
 
+TEST(ParseReconNoise, NamesRoundTrip) {
+  for (auto m : {ReconNoiseModel::kIid, ReconNoiseModel::kCamera, ReconNoiseModel::kView})
+    EXPECT_EQ(ParseReconNoise(ReconNoiseName(m)), m);
+  EXPECT_THROW(ParseReconNoise("pixel"), UsageError);
+}
+
+// The per-view noise levels: i.i.d. noise leaves every scale near 1 (the shrinkage removes the
+// sampling scatter of 54-corner views), a view with 3x the noise in one camera stands out, the
+// per-camera model gives one level per camera and kIid exactly 1.
+TEST(EstimateReconNoiseScales, FindsANoisyViewAndStaysAtOneForIidNoise) {
+  const SimulationRig rig = DefaultSimulationRig();
+  std::mt19937_64 rng(11);
+  const auto poses = RandomBoardPoses(rig, 12, BoardPoseOptions(), rng);
+  StereoObservations obs = SynthesizeObservations(rig, poses, 0.5, rng);
+  const StereoCalibrationResult iid = CalibrateStereo(obs, Options(CalibrationMethod::kZhang));
+  for (const auto& scales : EstimateReconNoiseScales(obs, iid, ReconNoiseModel::kView)) {
+    EXPECT_NEAR(scales[0], 1.0, 0.08);
+    EXPECT_NEAR(scales[1], 1.0, 0.08);
+  }
+  // View 3's right corners get extra noise: σ = sqrt(0.5² + 1.4²) ≈ 1.5 px.
+  std::normal_distribution<double> extra(0.0, 1.4);
+  for (auto& p : obs.right[3].pixels) p += Eigen::Vector2d(extra(rng), extra(rng));
+  const StereoCalibrationResult noisy = CalibrateStereo(obs, Options(CalibrationMethod::kZhang));
+  const auto view = EstimateReconNoiseScales(obs, noisy, ReconNoiseModel::kView);
+  EXPECT_GT(view[3][1], 2.0);
+  EXPECT_LT(view[3][0], 1.3);
+  for (size_t v = 0; v < view.size(); ++v) {
+    if (v == 3) continue;
+    EXPECT_LT(view[v][0], 1.2) << v;
+    EXPECT_LT(view[v][1], 1.2) << v;
+  }
+  const auto camera = EstimateReconNoiseScales(obs, noisy, ReconNoiseModel::kCamera);
+  for (const auto& scales : camera) {
+    EXPECT_DOUBLE_EQ(scales[0], camera[0][0]);
+    EXPECT_DOUBLE_EQ(scales[1], camera[0][1]);
+  }
+  EXPECT_GT(camera[0][1], camera[0][0]);
+  for (const auto& scales : EstimateReconNoiseScales(obs, noisy, ReconNoiseModel::kIid)) {
+    EXPECT_EQ(scales[0], 1.0);
+    EXPECT_EQ(scales[1], 1.0);
+  }
+  // recon with the per-view model down-weights the noisy view: its right focal length is closer
+  // to the truth than with i.i.d. weights on this set.
+  StereoCalibrationOptions options = Options(CalibrationMethod::kRecon);
+  options.recon_noise = ReconNoiseModel::kIid;
+  const StereoCalibrationResult recon_iid = CalibrateStereo(obs, options);
+  options.recon_noise = ReconNoiseModel::kView;
+  const StereoCalibrationResult recon_view = CalibrateStereo(obs, options);
+  const auto squared_error = [&](const StereoCalibrationResult& r) {
+    double sum = 0;
+    for (int i : {kFx, kFy, kCx, kCy}) {
+      sum += std::pow(r.left.params[i] - rig.left.params[i], 2) +
+             std::pow(r.right.params[i] - rig.right.params[i], 2);
+    }
+    return sum;
+  };
+  EXPECT_LT(squared_error(recon_view), squared_error(recon_iid));
+}
+
 TEST(AlignPointSets, RecoversRigidMotionWithProperRotation) {
   Pose truth;
   truth.params = {0.2, -0.4, 0.1, 0.3, -0.1, 0.05};
@@ -107,6 +166,39 @@ TEST(ReconCornerResidual, EqualsTheReprojectionChiSquareToFirstOrder) {
       reconstruction_sum += r.tail<3>().squaredNorm();
     }
     EXPECT_NEAR(reconstruction_sum / samples, 3 * weight * weight * 1e-4, 0.6 * weight * 1e-4);
+  }
+}
+
+// With per-camera noise scales the corner term is the χ² of the pixel residuals in units of each
+// camera's noise: |r|² = |e_left|²/s_l² + |e_right|²/s_r² to first order.
+TEST(ReconCornerResidual, WhitensEachCameraByItsNoiseScale) {
+  const SimulationRig rig = DefaultSimulationRig();
+  const Eigen::Vector3d board_point(0.05, 0.1, 0);
+  const Pose left_from_board = Pose::FromRotationTranslation(
+      Eigen::AngleAxisd(-0.2, Eigen::Vector3d(0.3, 1, 0).normalized()).toRotationMatrix(),
+      Eigen::Vector3d(0.05, -0.02, 0.7));
+  const Eigen::Vector3d in_left = left_from_board.Apply(board_point);
+  const Eigen::Vector3d in_right = rig.right_from_left.Apply(in_left);
+  Eigen::Vector2d left_exact, right_exact;
+  ASSERT_TRUE(Project(rig.left.params.data(), in_left.data(), left_exact.data()));
+  ASSERT_TRUE(Project(rig.right.params.data(), in_right.data(), right_exact.data()));
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  const double s_left = 2.0, s_right = 0.5;
+  for (int s = 0; s < 100; ++s) {
+    const Eigen::Vector4d e(noise(rng), noise(rng), noise(rng), noise(rng));
+    const detail::ReconCornerResidual cost(left_exact - e.head<2>(), right_exact - e.tail<2>(),
+                                           board_point, Eigen::Vector2d(0, 0), 1.0, s_left,
+                                           s_right);
+    const BoardBend flat{};
+    double residual[7];
+    ASSERT_TRUE(cost(rig.left.params.data(), rig.right.params.data(), left_from_board.params.data(),
+                     rig.right_from_left.params.data(), flat.data(), residual));
+    const double expected = e.head<2>().squaredNorm() / (s_left * s_left) +
+                            e.tail<2>().squaredNorm() / (s_right * s_right);
+    double norm2 = 0;
+    for (double r : residual) norm2 += r * r;
+    EXPECT_NEAR(norm2, expected, 1e-3 * expected);
   }
 }
 
