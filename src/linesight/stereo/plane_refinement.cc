@@ -145,13 +145,14 @@ struct FitPoints {
   }
 };
 
-// MarkInliers and AccumulateNormalEquations over the marked points in one pass, branch-free (the
-// inlier test is unpredictable on noisy segments): every point adds its terms or 0, which gives the
-// same sums in the same order as adding the inliers only. Also returns the sum of squared inlier
-// residuals (as MarkInliers sums them) in *squares.
-int MarkAndAccumulateInliers(const FitPoints& points, const DisparityPlane& plane, double threshold,
-                             std::vector<uint8_t>* mask, PlaneNormalEquations* equations,
-                             double* squares) {
+// Marks the inliers of `plane`, returns their count and writes the sum of their squared residuals;
+// with kAccumulate also their normal equations in the same pass. Branch-free (the inlier test is
+// unpredictable on noisy segments): every point adds its terms or 0, which gives the same sums in
+// the same order as adding the inliers only.
+template <bool kAccumulate>
+int MarkInliers(const FitPoints& points, const DisparityPlane& plane, double threshold,
+                std::vector<uint8_t>* mask, double* squares,
+                PlaneNormalEquations* equations = nullptr) {
   const size_t n = points.x.size();
   mask->resize(n);
   uint8_t* marks = mask->data();
@@ -164,31 +165,17 @@ int MarkAndAccumulateInliers(const FitPoints& points, const DisparityPlane& plan
     marks[i] = inlier;
     count += inlier;
     sum_squares += inlier ? r * r : 0.0;
-    const std::array<double, 9>& t = points.terms[i];
-    for (int k = 0; k < 9; ++k) sums[k] += inlier ? t[k] : 0.0;
+    if constexpr (kAccumulate) {
+      const std::array<double, 9>& t = points.terms[i];
+      for (int k = 0; k < 9; ++k) sums[k] += inlier ? t[k] : 0.0;
+    }
   }
-  PlaneNormalEquations& e = *equations;
-  e.sxx = sums[0], e.sxy = sums[1], e.syy = sums[2], e.sx = sums[3], e.sy = sums[4], e.n = sums[5];
-  e.sxd = sums[6], e.syd = sums[7], e.sd = sums[8];
+  if constexpr (kAccumulate) {
+    PlaneNormalEquations& e = *equations;
+    e.sxx = sums[0], e.sxy = sums[1], e.syy = sums[2], e.sx = sums[3], e.sy = sums[4];
+    e.n = sums[5], e.sxd = sums[6], e.syd = sums[7], e.sd = sums[8];
+  }
   *squares = sum_squares;
-  return count;
-}
-
-int MarkInliers(const FitPoints& points, const DisparityPlane& plane, double threshold,
-                std::vector<uint8_t>* mask, double* rms) {
-  const size_t n = points.x.size();
-  mask->resize(n);
-  uint8_t* marks = mask->data();
-  int count = 0;
-  double squares = 0;
-  for (size_t i = 0; i < n; ++i) {  // branch-free, as MarkAndAccumulateInliers
-    const double r = plane.At(points.x[i], points.y[i]) - points.d[i];
-    const bool inlier = std::abs(r) <= threshold;
-    marks[i] = inlier;
-    count += inlier;
-    squares += inlier ? r * r : 0.0;
-  }
-  *rms = count > 0 ? std::sqrt(squares / count) : 0.0;
   return count;
 }
 
@@ -200,25 +187,26 @@ SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments) {
   // each segment's pixels after those of stripes < t, so the result is the serial one.
   constexpr int kStripes = 4;
   const int rows = labels.rows, cols = labels.cols;
-  const auto stripe_rows = [&](int t) {
-    return cv::Range(rows * t / kStripes, rows * (t + 1) / kStripes);
+  // Calls row(t, y, labels of row y) for every row of every stripe t, stripes in parallel.
+  const auto for_each_stripe_row = [&](const auto& row) {
+    cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
+      for (int t = range.start; t < range.end; ++t) {
+        for (int y = rows * t / kStripes; y < rows * (t + 1) / kStripes; ++y) {
+          row(t, y, labels.ptr<int32_t>(y));
+        }
+      }
+    });
   };
   std::vector<int32_t> counts(static_cast<size_t>(kStripes) * num_segments, 0);
   std::atomic<bool> bad_label{false};
-  cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
-    for (int t = range.start; t < range.end; ++t) {
-      int32_t* count = &counts[static_cast<size_t>(t) * num_segments];
-      const cv::Range r = stripe_rows(t);
-      for (int y = r.start; y < r.end; ++y) {
-        const int32_t* l = labels.ptr<int32_t>(y);
-        for (int x = 0; x < cols; ++x) {
-          if (l[x] < 0 || l[x] >= num_segments) {
-            bad_label = true;
-            return;
-          }
-          ++count[l[x]];
-        }
+  for_each_stripe_row([&](int t, int, const int32_t* l) {
+    int32_t* count = &counts[static_cast<size_t>(t) * num_segments];
+    for (int x = 0; x < cols; ++x) {
+      if (l[x] < 0 || l[x] >= num_segments) {
+        bad_label = true;
+        return;
       }
+      ++count[l[x]];
     }
   });
   LS_CHECK(!bad_label);
@@ -237,19 +225,13 @@ SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments) {
   index.pixels.resize(labels.total());
   index.x.resize(labels.total());
   index.y.resize(labels.total());
-  cv::parallel_for_(cv::Range(0, kStripes), [&](const cv::Range& range) {
-    for (int t = range.start; t < range.end; ++t) {
-      int32_t* cursor = &cursors[static_cast<size_t>(t) * num_segments];
-      const cv::Range r = stripe_rows(t);
-      for (int y = r.start; y < r.end; ++y) {
-        const int32_t* l = labels.ptr<int32_t>(y);
-        for (int x = 0; x < cols; ++x) {
-          const int32_t at = cursor[l[x]]++;
-          index.pixels[at] = y * cols + x;
-          index.x[at] = x;
-          index.y[at] = y;
-        }
-      }
+  for_each_stripe_row([&](int t, int y, const int32_t* l) {
+    int32_t* cursor = &cursors[static_cast<size_t>(t) * num_segments];
+    for (int x = 0; x < cols; ++x) {
+      const int32_t at = cursor[l[x]]++;
+      index.pixels[at] = y * cols + x;
+      index.x[at] = x;
+      index.y[at] = y;
     }
   });
   return index;
@@ -349,8 +331,7 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
   bool marked_best = false;  // inlier_mask, count and squares belong to `best`
   for (int it = 0; it < options.refit_iterations; ++it) {
     PlaneNormalEquations equations;
-    count = MarkAndAccumulateInliers(fit_points, best, threshold, &fit->inlier_mask, &equations,
-                                     &squares);
+    count = MarkInliers<true>(fit_points, best, threshold, &fit->inlier_mask, &squares, &equations);
     marked_best = true;
     if (count < 3) break;
     if (it > 0 && fit->inlier_mask == previous_mask) break;
@@ -362,13 +343,11 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
     marked_best = false;
     std::swap(previous_mask, fit->inlier_mask);
   }
+  if (!marked_best)
+    count = MarkInliers<false>(fit_points, best, threshold, &fit->inlier_mask, &squares);
   fit->plane = best;
-  if (marked_best) {
-    fit->inliers = count;
-    fit->residual_rms = count > 0 ? std::sqrt(squares / count) : 0.0;
-  } else {
-    fit->inliers = MarkInliers(fit_points, best, threshold, &fit->inlier_mask, &fit->residual_rms);
-  }
+  fit->inliers = count;
+  fit->residual_rms = count > 0 ? std::sqrt(squares / count) : 0.0;
   return true;
 }
 
