@@ -43,28 +43,29 @@ IsgmMatcher::IsgmMatcher(const IsgmOptions& options) : options_(options), sgm_(o
 
 IsgmResult IsgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right) {
   IsgmResult result;
-  Run(left, right, &result.sgm, &result);
+  result.sgm = sgm_.ComputeDetailed(left, right);
+  Refine(left, right, result.sgm.disparity, &result);
   return result;
 }
 
 cv::Mat IsgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
+  // SgmMatcher::Compute reuses its intermediate maps between frames; the refinement needs only the
+  // disparity.
   IsgmResult result;
-  Run(left, right, &sgm_scratch_, &result);
+  Refine(left, right, sgm_.Compute(left, right), &result);
   return result.disparity;
 }
 
-void IsgmMatcher::Run(const cv::Mat& left, const cv::Mat& right, SgmResult* sgm_result,
-                      IsgmResult* result_out) {
+void IsgmMatcher::Refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& sgm_disparity,
+                         IsgmResult* result_out) const {
   IsgmResult& result = *result_out;
-  sgm_.ComputeDetailed(left, right, sgm_result);
-  const SgmResult& sgm = *sgm_result;
   // The refinement runs on OpenCV's thread pool (like the OpenCV matchers, we size it from the
   // options); its result does not depend on the thread count.
   if (options_.sgm.threads > 0) cv::setNumThreads(options_.sgm.threads);
   // Superpixels on the grey image: as accurate as 8-bit Lab on every benchmark set we measured
   // (better on ETH3D, KITTI, Middlebury 2005/2014) at a third of the distance computations.
   const cv::Mat left_for_segments = ToGray8(left), right_for_segments = ToGray8(right);
-  result.disparity = RefineDisparityWithPlanes(sgm.disparity, left_for_segments, right_for_segments,
+  result.disparity = RefineDisparityWithPlanes(sgm_disparity, left_for_segments, right_for_segments,
                                                options_.refinement, &result.refinement);
   // Planes are clamped to the range of SGM's valid values; if SGM found nothing, the zeros of the
   // fill are moved into the search range.

@@ -56,12 +56,12 @@ class IsgmMatcher final : public StereoMatcher {
   const IsgmOptions& options() const { return options_; }
 
  private:
-  // The pipeline into *result; the SGM stage into *sgm_result (reused buffers in Compute()).
-  void Run(const cv::Mat& left, const cv::Mat& right, SgmResult* sgm_result, IsgmResult* result);
+  // The refinement of SGM's disparity into result->disparity and result->refinement.
+  void Refine(const cv::Mat& left, const cv::Mat& right, const cv::Mat& sgm_disparity,
+              IsgmResult* result) const;
 
   IsgmOptions options_;
   SgmMatcher sgm_;
-  SgmResult sgm_scratch_;  // Compute()'s SGM products, reused between frames
 };
 
 // Reads IsgmOptions from MatcherOptions and --param keys: every sgm key (census_width,
