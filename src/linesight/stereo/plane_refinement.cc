@@ -155,18 +155,24 @@ int MarkInliers(const FitPoints& points, const DisparityPlane& plane, double thr
                 PlaneNormalEquations* equations = nullptr) {
   const size_t n = points.x.size();
   mask->resize(n);
-  uint8_t* marks = mask->data();
+  // Local restrict pointers: the byte stores to the mask may alias anything, which otherwise makes
+  // the compiler reload every vector's data pointer (from thread-local storage) for each point.
+  uint8_t* __restrict marks = mask->data();
+  const double* __restrict xs = points.x.data();
+  const double* __restrict ys = points.y.data();
+  const double* __restrict ds = points.d.data();
+  const std::array<double, 9>* __restrict terms = points.terms.data();
   double sums[9] = {};
   int count = 0;
   double sum_squares = 0;
   for (size_t i = 0; i < n; ++i) {
-    const double r = plane.At(points.x[i], points.y[i]) - points.d[i];
+    const double r = plane.At(xs[i], ys[i]) - ds[i];
     const bool inlier = std::abs(r) <= threshold;
     marks[i] = inlier;
     count += inlier;
     sum_squares += inlier ? r * r : 0.0;
     if constexpr (kAccumulate) {
-      const std::array<double, 9>& t = points.terms[i];
+      const std::array<double, 9>& t = terms[i];
       for (int k = 0; k < 9; ++k) sums[k] += inlier ? t[k] : 0.0;
     }
   }
@@ -180,6 +186,31 @@ int MarkInliers(const FitPoints& points, const DisparityPlane& plane, double thr
 }
 
 }  // namespace
+
+cv::Mat MedianBlurStripes(const cv::Mat& src, int ksize) {
+  const int context = ksize / 2;
+  // Stripes of at least 8 kernel heights, so the context rows stay a small overhead.
+  const int stripes = std::clamp(std::min(cv::getNumThreads(), src.rows / (8 * ksize)), 1, 64);
+  if (stripes == 1) {
+    cv::Mat dst;
+    cv::medianBlur(src, dst, ksize);
+    return dst;
+  }
+  cv::Mat dst(src.size(), src.type());
+  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+    for (int s = range.start; s < range.end; ++s) {
+      const int y0 = src.rows * s / stripes, y1 = src.rows * (s + 1) / stripes;
+      const int c0 = std::max(0, y0 - context), c1 = std::min(src.rows, y1 + context);
+      // A copy, so that the filter sees exactly these rows (and replicates only the image's own
+      // first and last rows, as on the whole image).
+      const cv::Mat part = src.rowRange(c0, c1).clone();
+      cv::Mat filtered;
+      cv::medianBlur(part, filtered, ksize);
+      filtered.rowRange(y0 - c0, y1 - c0).copyTo(dst.rowRange(y0, y1));
+    }
+  });
+  return dst;
+}
 
 SegmentIndex BuildSegmentIndex(const cv::Mat& labels, int num_segments) {
   LS_CHECK(labels.type() == CV_32SC1);
@@ -300,7 +331,9 @@ bool FitPlaneRobust(const std::vector<PlanePoint>& points, const PlaneRefinement
   int best_score = CountInliers(sample, best, threshold);
 
   SplitMix64 rng{seed};
-  for (int it = 0; it < options.ransac_iterations; ++it) {
+  // A hypothesis replaces the best only with strictly more inliers: once every sampled point is an
+  // inlier, none can, and the remaining hypotheses are skipped (the result is the same).
+  for (int it = 0; it < options.ransac_iterations && best_score < sample_size; ++it) {
     const int i = rng.Below(n), j = rng.Below(n), k = rng.Below(n);
     if (i == j || j == k || i == k) continue;
     const PlanePoint &p = points[i], &q = points[j], &r = points[k];
@@ -832,9 +865,7 @@ cv::Mat RefineDisparityWithPlanes(const cv::Mat& disparity, const cv::Mat& left_
   if (options.median_size > 1) {
     // A last median over the dense map removes the streaks of row-wise filling and isolated
     // remaining mismatches (Hirschmueller 2008 smooths the same way).
-    cv::Mat smoothed;
-    cv::medianBlur(out, smoothed, options.median_size);
-    out = smoothed;
+    out = detail::MedianBlurStripes(out, options.median_size);
   }
   st.fill_ms = watch.ElapsedMs();
   return out;

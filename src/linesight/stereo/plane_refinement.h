@@ -13,7 +13,8 @@
 //  6. FillFromBackground: what is still invalid takes the smaller (background) disparity of the
 //     nearest valid pixels left and right on its row (Hirschmueller's occlusion filling), so the
 //     result is 100 % dense.
-//  7. A final median (cv::medianBlur, PlaneRefinementOptions::median_size).
+//  7. A final median (cv::medianBlur over row stripes in parallel,
+//  PlaneRefinementOptions::median_size).
 // Every stage is deterministic and independent of the thread count (per-segment work writes only
 // its own pixels; RANSAC draws from a generator seeded by the segment number).
 #pragma once
@@ -210,6 +211,11 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
 // row (one side if only one exists); rows without any valid pixel copy the nearest filled row; an
 // image without any valid pixel becomes 0. Returns the number of pixels filled.
 int64_t FillFromBackground(cv::Mat* disparity);
+
+// cv::medianBlur(src, ksize) computed over row stripes in parallel (OpenCV's float median runs on
+// one thread); each stripe is filtered with the ksize / 2 rows of context it needs, so the result
+// is identical to cv::medianBlur for any thread count.
+cv::Mat MedianBlurStripes(const cv::Mat& src, int ksize);
 
 }  // namespace detail
 }  // namespace linesight

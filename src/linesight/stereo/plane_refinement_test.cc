@@ -311,6 +311,35 @@ TEST(BuildSegmentIndex, EqualsNaiveRasterOrderOnAwkwardSizes) {
   }
 }
 
+TEST(MedianBlurStripes, EqualsOpenCvMedianForAnyThreadCount) {
+  const int saved_threads = cv::getNumThreads();
+  cv::RNG rng(7);
+  for (const cv::Size size :
+       {cv::Size(311, 239), cv::Size(17, 97), cv::Size(64, 41), cv::Size(5, 3)}) {
+    cv::Mat src(size, CV_32FC1);
+    rng.fill(src, cv::RNG::UNIFORM, -5.0, 80.0);
+    // Runs of equal values and unknown (+inf) pixels, as in a filled disparity map.
+    src.rowRange(0, std::min(3, size.height)).setTo(12.5f);
+    for (int i = 0; i < size.area() / 20; ++i) {
+      src.at<float>(rng.uniform(0, size.height), rng.uniform(0, size.width)) =
+          std::numeric_limits<float>::infinity();
+    }
+    for (const int ksize : {3, 5}) {
+      cv::Mat expected;
+      cv::medianBlur(src, expected, ksize);
+      for (const int threads : {1, 2, 3, 8}) {
+        cv::setNumThreads(threads);
+        const cv::Mat got = detail::MedianBlurStripes(src, ksize);
+        ASSERT_EQ(got.size(), expected.size());
+        ASSERT_EQ(got.type(), expected.type());
+        EXPECT_EQ(cv::norm(got != expected, cv::NORM_L1), 0.0)
+            << size << " ksize " << ksize << " threads " << threads;
+      }
+    }
+  }
+  cv::setNumThreads(saved_threads);
+}
+
 TEST(FillFromBackground, TakesTheSmallerSideAlongTheRow) {
   const float inf = kInvalidDisparity;
   cv::Mat d = (cv::Mat_<float>(4, 7) << 20, 20, inf, inf, inf, 10, 10,  // occlusion between
