@@ -371,12 +371,11 @@ int RunEvalRanging(int argc, char** argv) {
   int runs = 50, boards = 15, supersampling = 2;
   std::uint64_t seed = 1;
   double noise_dn = 1.0;
-  // Rig mounting: x of the conductor axis at the camera (the scene's default, as in `linesight
-  // demo`, is the rig beside the line). Measured trade-off (README, ranging): beside the line
-  // (-0.10 m) an obstacle at 0.3 m is outside the right camera's view; centred under the line
-  // (>= 0 m) the near range works but obstacles from 4 m on sit in front of the lattice tower at
-  // the line's vanishing point and SGM loses them.
+  // Rig mounting and background (defaults: the scene's, as in `linesight demo`).
   double conductor_offset_x_m = sim::PowerLineSceneOptions().conductor_offset_x_m;
+  double tower_offset_x_m = sim::PowerLineSceneOptions().tower_offset_x_m;
+  double conductor_offset_y_m = sim::PowerLineSceneOptions().conductor_offset_y_m;
+  double conductor_yaw_rad = sim::PowerLineSceneOptions().conductor_yaw_rad;
   std::vector<std::string> raw_params, ranging_settings;
   RangingPipelineOptions options;
   app.add_option("--runs", runs, "measurements per type and distance (fresh sensor noise each)")
@@ -395,6 +394,15 @@ int RunEvalRanging(int argc, char** argv) {
   app.add_option("--conductor-offset-x", conductor_offset_x_m,
                  "x of the conductor axis at the camera, in the left camera frame (m); 0.06 = rig "
                  "centred under the line")
+      ->capture_default_str();
+  app.add_option("--conductor-offset-y", conductor_offset_y_m,
+                 "y of the conductor axis at the camera (m; < 0 = above the camera)")
+      ->capture_default_str();
+  app.add_option("--conductor-yaw", conductor_yaw_rad,
+                 "heading of the line about the camera y axis (rad)")
+      ->capture_default_str();
+  app.add_option("--tower-offset-x", tower_offset_x_m,
+                 "x offset of the end tower's body from the middle of the conductors (m)")
       ->capture_default_str();
   app.add_option("--supersampling", supersampling, "renderer supersampling per axis")
       ->capture_default_str();
@@ -484,6 +492,9 @@ int RunEvalRanging(int argc, char** argv) {
     scene_options.sensor.noise_sigma_dn = noise_dn;
     scene_options.sensor.supersampling = supersampling;
     scene_options.conductor_offset_x_m = conductor_offset_x_m;
+    scene_options.conductor_offset_y_m = conductor_offset_y_m;
+    scene_options.conductor_yaw_rad = conductor_yaw_rad;
+    scene_options.tower_offset_x_m = tower_offset_x_m;
     scene_options.Check();
     const StereoCalibration true_calib = sim::MakeStereoCalibration(scene_options.rig);
     nlohmann::json report;

@@ -89,6 +89,9 @@ int RunRender(int argc, char** argv) {
                  "heading of the line about the camera y axis (rad)")
       ->capture_default_str();
   app.add_flag("--no-towers", no_towers, "leave out the lattice towers");
+  app.add_option("--tower-offset-x", options.tower_offset_x_m,
+                 "x offset of the end tower's body from the middle of the conductors (m)")
+      ->capture_default_str();
   app.add_flag("--rectified", options.render_rectified_pair,
                "also ray cast an ideal rectified pair (rectified_left/right.png)");
   app.add_option("--boards", boards,

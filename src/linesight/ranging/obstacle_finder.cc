@@ -22,6 +22,8 @@ void ObstacleFinderOptions::Check() const {
   CheckOption(min_area_px >= 1, "ObstacleFinderOptions.min_area_px", min_area_px, "must be >= 1");
   CheckOption(merge_overlap > 0.0 && merge_overlap <= 1.0, "ObstacleFinderOptions.merge_overlap",
               merge_overlap, "must be in (0, 1]");
+  CheckOption(merge_depth_log_ratio > 0.0, "ObstacleFinderOptions.merge_depth_log_ratio",
+              merge_depth_log_ratio, "must be > 0");
 }
 
 std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const StereoGeometry& geometry,
@@ -60,6 +62,7 @@ std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const Stereo
   cv::Mat labels, stats, centroids;
   const int count = cv::connectedComponentsWithStats(thick, labels, stats, centroids, 8, CV_32S);
   std::vector<cv::Rect> boxes;
+  std::vector<int> box_bands, box_areas;  // median depth band and pixel count of each region
   for (int label = 1; label < count; ++label) {
     cv::Rect box(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
                  stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
@@ -87,21 +90,31 @@ std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const Stereo
     cv::inRange(band_of(outer), k - 3, k + 3, same_surface);
     grown &= same_surface;
     const cv::Rect grown_box = cv::boundingRect(grown) + outer.tl();
-    if (cv::countNonZero(grown) < options.min_area_px) continue;
+    const int area = cv::countNonZero(grown);
+    if (area < options.min_area_px) continue;
     boxes.push_back(grown_box);
+    box_bands.push_back(k);
+    box_areas.push_back(area);
   }
 
-  // Merge boxes that overlap a lot (one obstacle split into parts, e.g. the two weights of a damper
-  // are not merged unless they overlap).
+  // Merge boxes that overlap a lot and lie at similar depths (one obstacle split into parts, e.g.
+  // the two weights of a damper are not merged unless they overlap); the merged region keeps the
+  // depth band of its larger part.
+  const double merge_bands = options.merge_depth_log_ratio / band;
   bool merged = true;
   while (merged) {
     merged = false;
     for (size_t i = 0; i < boxes.size() && !merged; ++i) {
       for (size_t j = i + 1; j < boxes.size() && !merged; ++j) {
         const double overlap = (boxes[i] & boxes[j]).area();
-        if (overlap > options.merge_overlap * std::min(boxes[i].area(), boxes[j].area())) {
+        if (overlap > options.merge_overlap * std::min(boxes[i].area(), boxes[j].area()) &&
+            std::abs(box_bands[i] - box_bands[j]) <= merge_bands) {
           boxes[i] |= boxes[j];
+          if (box_areas[j] > box_areas[i]) box_bands[i] = box_bands[j];
+          box_areas[i] += box_areas[j];
           boxes.erase(boxes.begin() + long(j));
+          box_bands.erase(box_bands.begin() + long(j));
+          box_areas.erase(box_areas.begin() + long(j));
           merged = true;
         }
       }

@@ -42,6 +42,30 @@ TEST(ObstacleFinderTest, FindsBlocksButNotTheConductor) {
   EXPECT_LE(std::abs(results[1].box.y - 110), 2);
 }
 
+// A small block at 3 m in front of a tall one at 4.5 m whose box contains it (the clamp before the
+// insulator string in `linesight demo`): two obstacles, not one merged region; two overlapping
+// parts at nearly one depth (a damper's weights) still merge.
+TEST(ObstacleFinderTest, OverlappingRegionsAtDifferentDepthsStaySeparate) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(kInvalidDisparity));
+  d(cv::Rect(140, 20, 40, 200)).setTo(float(g.DisparityFromDepth(4.5)));
+  d(cv::Rect(150, 150, 20, 20)).setTo(float(g.DisparityFromDepth(3.0)));
+  d += testing::CorrelatedNoise(d.size(), 0.05, 5);
+  const std::vector<RangeResult> results = RangeAllObstacles(d, g, {}, {});
+  ASSERT_EQ(results.size(), 2u);
+  EXPECT_NEAR(results[0].distance_m, 3.0, 0.03);
+  EXPECT_NEAR(results[1].distance_m, 4.5, 0.05);
+  // The old rule (overlap only) merges them.
+  ObstacleFinderOptions overlap_only;
+  overlap_only.merge_depth_log_ratio = 10.0;
+  EXPECT_EQ(FindObstacleRegions(d, g, overlap_only).size(), 1u);
+
+  cv::Mat parts(240, 320, CV_32F, cv::Scalar(kInvalidDisparity));
+  parts(cv::Rect(100, 100, 40, 40)).setTo(float(g.DisparityFromDepth(1.5)));
+  parts(cv::Rect(104, 96, 40, 40)).setTo(float(g.DisparityFromDepth(1.7)));
+  EXPECT_EQ(FindObstacleRegions(parts, g, {}).size(), 1u);
+}
+
 TEST(ObstacleFinderTest, NothingInRangeFindsNothing) {
   const StereoGeometry g = TestGeometry();
   cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(40.0))));

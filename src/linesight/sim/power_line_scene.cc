@@ -231,6 +231,8 @@ void PowerLineSceneOptions::Check() const {
   CheckOption(conductor_spacing_m >= 4 * conductor_radius_m && conductor_spacing_m <= 10,
               "PowerLineSceneOptions.conductor_spacing_m", conductor_spacing_m,
               "must be in [4 * conductor_radius_m, 10] m");
+  CheckOption(std::isfinite(tower_offset_x_m) && std::fabs(tower_offset_x_m) <= 20,
+              "PowerLineSceneOptions.tower_offset_x_m", tower_offset_x_m, "must be in [-20, 20] m");
   CheckOption(std::fabs(conductor_yaw_rad) <= 0.5, "PowerLineSceneOptions.conductor_yaw_rad",
               conductor_yaw_rad, "must be in [-0.5, 0.5] rad");
   CheckOption(std::fabs(conductor_pitch_rad) <= 0.5, "PowerLineSceneOptions.conductor_pitch_rad",
@@ -552,9 +554,10 @@ void AddObstacle(ObstacleType type, const LocalFrame& f, double r, int id,
 }
 
 // Square lattice tower standing on the ground at `base` (world), `height` tall, with a crossarm
-// across the line at `crossarm_y`.
+// across the line at `crossarm_y` reaching from x = base.x + arm_x0 to base.x + arm_x1 (arm_x0 <
+// arm_x1; the body lies inside that range).
 void AddLatticeTower(Vec3 base, double height, double base_width, double top_width,
-                     double crossarm_y, double crossarm_half_length, std::vector<Shape>* shapes) {
+                     double crossarm_y, double arm_x0, double arm_x1, std::vector<Shape>* shapes) {
   auto add = [&](Vec3 a, Vec3 b, double radius) {
     shapes->push_back(
         Tagged(MakeCapsule(a, b, radius), Material::kTowerSteel, kClassTower, 0, 7.0));
@@ -580,11 +583,11 @@ void AddLatticeTower(Vec3 base, double height, double base_width, double top_wid
   const double arm_y = crossarm_y;
   for (double dz : {-0.5, 0.5}) {
     for (double dy : {0.0, -0.6}) {
-      add({base.x - crossarm_half_length, arm_y + dy, base.z + dz},
-          {base.x + crossarm_half_length, arm_y + dy, base.z + dz}, 0.06);
+      add({base.x + arm_x0, arm_y + dy, base.z + dz}, {base.x + arm_x1, arm_y + dy, base.z + dz},
+          0.06);
     }
   }
-  for (double x = -crossarm_half_length; x < crossarm_half_length - 1e-9; x += 1.0) {
+  for (double x = arm_x0; x < arm_x1 - 1e-9; x += 1.0) {
     add({base.x + x, arm_y, base.z - 0.5}, {base.x + x + 1.0, arm_y - 0.6, base.z - 0.5}, 0.035);
     add({base.x + x, arm_y, base.z + 0.5}, {base.x + x + 1.0, arm_y - 0.6, base.z + 0.5}, 0.035);
   }
@@ -719,13 +722,19 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
         end0.x + 0.5 * (options.num_conductors - 1) * options.conductor_spacing_m;
     const double crossarm_y = end0.y - 1.5;
     const double height = options.ground_depth_m - crossarm_y;
-    AddLatticeTower({middle_x, options.ground_depth_m, span + 0.6}, height, 7.0, 1.8, crossarm_y,
-                    3.0 + 0.5 * options.num_conductors * options.conductor_spacing_m, &parts.fixed);
+    // The end tower's body stands tower_offset_x_m beside the middle of the conductors; its
+    // crossarm reaches from the body across all conductors.
+    const double body_x = middle_x + options.tower_offset_x_m;
+    const double reach = 3.0 + 0.5 * options.num_conductors * options.conductor_spacing_m;
+    const double arm_x0 = std::min(-3.0, middle_x - reach - body_x);
+    const double arm_x1 = std::max(3.0, middle_x + reach - body_x);
+    AddLatticeTower({body_x, options.ground_depth_m, span + 0.6}, height, 7.0, 1.8, crossarm_y,
+                    arm_x0, arm_x1, &parts.fixed);
     // The neighbouring line of the corridor, off to the side.
     AddLatticeTower({middle_x + 28.0, options.ground_depth_m, 0.35 * span + 25.0}, height + 4.0,
-                    7.0, 1.8, crossarm_y - 4.0, 4.0, &parts.fixed);
+                    7.0, 1.8, crossarm_y - 4.0, -4.0, 4.0, &parts.fixed);
     AddLatticeTower({middle_x + 28.0, options.ground_depth_m, 1.35 * span + 25.0}, height + 4.0,
-                    7.0, 1.8, crossarm_y - 4.0, 4.0, &parts.fixed);
+                    7.0, 1.8, crossarm_y - 4.0, -4.0, 4.0, &parts.fixed);
     // Its conductors, sagging between the two crossarms (plain cables: far away, no strand detail).
     const double z0 = 0.35 * span + 25.0, z1 = 1.35 * span + 25.0,
                  attach_y = crossarm_y - 4.0 + 1.5;

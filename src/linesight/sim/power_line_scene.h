@@ -165,6 +165,15 @@ struct PowerLineSceneOptions {
   // left frame. It runs away from the camera along +z (turned by yaw and pitch) and sags as a
   // catenary with its lowest point half-way to the next tower, `span_ahead_m` ahead, where it ends.
   // The other conductors are parallel to it, spaced along x.
+  //
+  // Default mounting: the line passes 0.10 m left of and 0.10 m above the left camera and the
+  // rig is turned towards it, so the line heads 0.30 rad to the right and crosses in front of the
+  // lenses: an obstacle on it at 0.3 m lies in both views (looking along the line, yaw -0.10, an
+  // obstacle at 0.3 m is left of the right camera's view). The line stays left of both
+  // cameras (its perpendicular offset is -0.095 m), so both see the same side of it, leaning the
+  // same way in both images: with the line above the middle of the baseline (x = 0.06) the two
+  // views see it from opposite sides, its image leans left in one view and right in the other,
+  // and isgm and sgbm lose it and the obstacles on it from 3.5 m on (`eval ranging`, README).
   int num_conductors = 2;  // 1..4
   // x of conductor 0's axis at z = 0 (m).
   double conductor_offset_x_m = -0.10;
@@ -173,7 +182,7 @@ struct PowerLineSceneOptions {
   // x spacing between neighbouring conductors (m), >= 4 conductor radii.
   double conductor_spacing_m = 3.5;
   // Heading of the line: rotation about the camera y axis (rad, > 0 turns towards +x), |.| <= 0.5.
-  double conductor_yaw_rad = -0.10;
+  double conductor_yaw_rad = 0.30;
   // Climb of the line at the camera: rotation about the camera x axis (rad, > 0 rises), |.| <= 0.5.
   double conductor_pitch_rad = 0.0;
   // Conductor radius (m); ACSR "Drake" is 28.1 mm across.
@@ -187,7 +196,11 @@ struct PowerLineSceneOptions {
   double conductor_lay_length_m = 0.30;  // helix pitch of the outer strands (m)
 
   // Background.
-  bool towers = true;            // lattice towers carrying the line in the distance
+  bool towers = true;  // lattice towers carrying the line in the distance
+  // x offset of the end tower's body from the middle of the conductors (m, world x), |.| <= 20;
+  // its crossarm reaches from the body across all conductors. 0 = the body between the
+  // conductors, near the line's vanishing point.
+  double tower_offset_x_m = 0.0;
   double ground_depth_m = 12.0;  // terrain height below the camera (m)
   double cloud_cover = 0.45;     // 0 = clear sky, 1 = overcast
 

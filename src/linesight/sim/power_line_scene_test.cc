@@ -65,6 +65,8 @@ TEST(PowerLineSceneOptions, RejectsValuesOutsideTheirRange) {
   expect_rejected([](auto& o) { o.obstacles[2].conductor = 2; }, "obstacles[2].conductor");
   expect_rejected([](auto& o) { o.conductor_radius_m = 0.001; }, "conductor_radius_m");
   expect_rejected([](auto& o) { o.conductor_yaw_rad = 0.6; }, "conductor_yaw_rad");
+  expect_rejected([](auto& o) { o.tower_offset_x_m = 25; }, "tower_offset_x_m");
+  expect_rejected([](auto& o) { o.tower_offset_x_m = std::nan(""); }, "tower_offset_x_m");
   expect_rejected([](auto& o) { o.span_ahead_m = 5; }, "span_ahead_m");
   expect_rejected([](auto& o) { o.cloud_cover = 1.5; }, "cloud_cover");
   expect_rejected([](auto& o) { o.sun_elevation_deg = 2; }, "sun_elevation_deg");
@@ -422,6 +424,69 @@ TEST_F(RenderedSmallScene, WritesEveryOutputReadably) {
   EXPECT_DOUBLE_EQ(json["obstacles"][0]["distance_m"].get<double>(), s.obstacles[0].distance_m);
   EXPECT_FALSE(std::filesystem::exists(dir / "scene" / "rectified_left.png"));
   std::filesystem::remove_all(dir);
+}
+
+// Share of the obstacle's nearest-surface pixels (true depth within 1 % of its distance) whose
+// correspondence x - d lies inside the rectified right image.
+double FrontShareInRightView(const PowerLineScene& scene) {
+  const RenderedObstacle& obstacle = scene.obstacles.front();
+  int front = 0, inside = 0;
+  for (int y = 0; y < scene.depth.rows; ++y) {
+    for (int x = 0; x < scene.depth.cols; ++x) {
+      if (scene.obstacle_mask.at<uchar>(y, x) != obstacle.id) continue;
+      if (scene.depth.at<float>(y, x) > 1.01 * obstacle.distance_m) continue;
+      ++front;
+      inside += x - scene.disparity.at<float>(y, x) >= 0.0f;
+    }
+  }
+  return front > 0 ? double(inside) / front : 0.0;
+}
+
+// The default mounting (line 0.10 m left of and above the rig, heading 0.30 rad to the right)
+// puts the nearest surface of every obstacle type at 0.3 m inside both views; looking along a
+// line beside the rig (yaw -0.10, the earlier default) it is left of the right camera's view.
+TEST(RenderPowerLineScene, DefaultMountingSeesObstaclesAt30CmInBothViews) {
+  for (ObstacleType type : AllObstacleTypes()) {
+    PowerLineSceneOptions o;
+    o.sensor.supersampling = 1;
+    o.sensor.noise_sigma_dn = 0;
+    o.obstacles = {{type, 0.3, 0}};
+    const PowerLineScene scene = RenderPowerLineScene(o);
+    ASSERT_EQ(scene.obstacles.size(), 1u);
+    EXPECT_NEAR(scene.obstacles.front().distance_m, 0.3, 1e-3);
+    EXPECT_GE(FrontShareInRightView(scene), 0.99) << ObstacleTypeName(type);
+    o.conductor_yaw_rad = -0.10;
+    EXPECT_LE(FrontShareInRightView(RenderPowerLineScene(o)), 0.05) << ObstacleTypeName(type);
+  }
+}
+
+// The end tower's body moves sideways with tower_offset_x_m: its pixels in the rectified left
+// image shift left for a negative offset.
+TEST(RenderPowerLineScene, TowerOffsetMovesTheEndTower) {
+  auto tower_centre_u = [](double offset) {
+    PowerLineSceneOptions o = SmallScene();
+    o.obstacles.clear();
+    o.tower_offset_x_m = offset;
+    o.num_conductors = 1;
+    const PowerLineScene scene = RenderPowerLineScene(o);
+    double sum = 0;
+    int n = 0;
+    for (int y = 0; y < scene.surface_class.rows; ++y) {
+      for (int x = 0; x < scene.surface_class.cols; ++x) {
+        // The end tower stands 80 m ahead: its disparity is below 1.5 px at half size.
+        if (scene.surface_class.at<uchar>(y, x) == uchar(SurfaceClass::kTower) &&
+            scene.disparity.at<float>(y, x) < 0.8f) {
+          sum += x;
+          ++n;
+        }
+      }
+    }
+    EXPECT_GT(n, 50);
+    return sum / std::max(1, n);
+  };
+  const double centred = tower_centre_u(0.0), moved = tower_centre_u(-8.0);
+  // 8 m at about 80 m is about 0.1 rad, 37 px at half size (fx 368); the crossarm stays.
+  EXPECT_LT(moved, centred - 15.0) << centred << " " << moved;
 }
 
 TEST(RenderPowerLineScene, RejectsAnObstacleThatCannotBeSeen) {
