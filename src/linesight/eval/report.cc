@@ -686,7 +686,26 @@ std::string CacheSection(const std::vector<EvalStereoResult>& bench,
         "fill them with `linesight eval stereo --methods gc --threads 1 --cache DIR --sets SET "
         "--noise clean,gauss:0.1,gauss:0.2,sp:0.15,sp:0.35`):\n\n",
         missing.size());
-    for (const std::string& m : missing) out += "- `" + m + "`\n";
+    // One line per scene and method: "set/scene (method): noise, noise".
+    std::vector<std::pair<std::string, std::vector<std::string>>> by_scene;
+    for (const std::string& m : missing) {
+      // m = set/scene/noise/method; noise labels hold no '/'.
+      const auto method_at = m.rfind('/');
+      const auto noise_at = m.rfind('/', method_at - 1);
+      const std::string scene =
+          fmt::format("{} ({})", m.substr(0, noise_at), m.substr(method_at + 1));
+      const std::string noise = m.substr(noise_at + 1, method_at - noise_at - 1);
+      auto it = std::find_if(by_scene.begin(), by_scene.end(),
+                             [&](const auto& entry) { return entry.first == scene; });
+      if (it == by_scene.end()) {
+        by_scene.push_back({scene, {}});
+        it = by_scene.end() - 1;
+      }
+      it->second.push_back(noise);
+    }
+    for (const auto& [scene, noises] : by_scene) {
+      out += fmt::format("- `{}`: {}\n", scene, fmt::join(noises, ", "));
+    }
     out += "\n";
   }
   return out;

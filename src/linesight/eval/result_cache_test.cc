@@ -207,8 +207,8 @@ TEST_F(ResultCacheTest, ReportTakesGcFromTheCacheAndListsWhatIsMissing) {
   EXPECT_NE(page.find("| middlebury-2001-2003 | alpha | clean | gc |"), std::string::npos) << page;
   EXPECT_NE(page.find("| middlebury-2001-2003 | alpha | sp:0.15 | gc |"), std::string::npos);
   EXPECT_NE(page.find("fill-commit"), std::string::npos);
-  EXPECT_NE(page.find("`middlebury-2001-2003/beta/clean/gc`"), std::string::npos);
-  EXPECT_NE(page.find("`middlebury-2001-2003/beta/sp:0.15/gc`"), std::string::npos);
+  EXPECT_NE(page.find("- `middlebury-2001-2003/beta (gc)`: clean, sp:0.15\n"), std::string::npos)
+      << page;
   EXPECT_NE(page.find("2 gc cell(s) are missing"), std::string::npos);
   EXPECT_NE(page.find("gc at sp:0.15: 1 of 2 scenes"), std::string::npos);
   // isgm is not read from the cache by default: it is measured again.
