@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -11,6 +12,8 @@
 #include "linesight/core/error.h"
 #include "linesight/core/progress.h"
 #include "linesight/eval/eval_stereo.h"
+#include "linesight/eval/report.h"
+#include "linesight/eval/result_cache.h"
 #include "linesight/stereo/matcher.h"
 
 namespace linesight::cli {
@@ -60,6 +63,16 @@ int RunEvalStereo(int argc, char** argv) {
   app.add_option("--plots", plots_dir, "write colour disparity and error maps here");
   app.add_option("--save-disparity", save_dir,
                  "write every disparity map as <dir>/<set>/<scene>/<method>.pfm");
+  std::string cache_dir;
+  std::vector<std::string> cache_read = {"*"};
+  app.add_option("--cache", cache_dir,
+                 "result cache folder: cells found there with exactly the same key (settings, "
+                 "noise, input and ground-truth fingerprints, algorithm version) are not run "
+                 "again; every computed cell is stored");
+  app.add_option("--cache-read", cache_read,
+                 "methods whose results are read from the cache (* = all; others only write)")
+      ->delimiter(',')
+      ->capture_default_str();
   return RunCommand(app, argc, argv, [&] {
     EvalStereoOptions options;
     options.methods = SplitComma(methods_text);
@@ -70,6 +83,16 @@ int RunEvalStereo(int argc, char** argv) {
     options.noise_seed = noise_seed;
     options.save_disparity_dir = save_dir;
     options.plots_dir = plots_dir;
+    std::optional<ResultCache> cache;
+    if (!cache_dir.empty()) {
+      std::error_code error;
+      const auto exe = std::filesystem::read_symlink("/proc/self/exe", error);
+      cache.emplace(cache_dir,
+                    GitDescription(error ? std::filesystem::current_path() : exe.parent_path()),
+                    MachineDescription());
+      options.cache = &*cache;
+      options.cache_read_methods = cache_read;
+    }
     const std::vector<SceneRef> scenes = SelectSets(FindScenes(data_dir), only_sets, "--sets");
     if (scenes.empty()) {
       throw InputError(

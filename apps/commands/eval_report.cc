@@ -63,10 +63,21 @@ int RunEvalReport(int argc, char** argv) {
   app.add_flag("--no-obstacles", no_obstacles, "skip the rendered obstacle images");
   app.add_option("--threads", options.threads, "matcher threads (0 = all cores)")
       ->capture_default_str();
+  std::string cache_dir;
+  app.add_option("--cache", cache_dir,
+                 "result cache folder (e.g. /work/cache/eval): every result is stored there and "
+                 "the --cache-read methods are taken from it on an exact key match");
+  app.add_option("--cache-read", options.cache_read_methods,
+                 "methods whose results are read from the cache (* = all)")
+      ->delimiter(',')
+      ->capture_default_str();
+  app.add_flag("--gc-cached-only", options.gc_cached_only,
+               "do not run gc: take its cells from --cache and list the missing ones on the page");
   std::string command_line = "linesight eval";  // argv[0] is the study name ("report")
   for (int i = 0; i < argc; ++i) command_line += fmt::format(" {}", argv[i]);
   return RunCommand(app, argc, argv, [&] {
     options.data_dir = data_dir;
+    options.cache_dir = cache_dir;
     options.out_dir = out_dir;
     options.noise.clear();
     for (const std::string& text : noise_texts) options.noise.push_back(NoiseSpec::Parse(text));

@@ -13,6 +13,7 @@
 #include "linesight/core/progress.h"
 #include "linesight/core/timer.h"
 #include "linesight/eval/plot.h"
+#include "linesight/eval/result_cache.h"
 #include "linesight/io/disparity_io.h"
 #include "linesight/io/image_io.h"
 #include "linesight/io/pfm.h"
@@ -24,6 +25,9 @@ namespace fs = std::filesystem;
 void EvalStereoOptions::Check() const {
   CheckOption(!methods.empty(), "EvalStereoOptions.methods", "(empty)", "name at least one method");
   CheckOption(threads >= 0, "EvalStereoOptions.threads", threads, "must be >= 0");
+  CheckOption(cache != nullptr || cache_only_methods.empty(),
+              "EvalStereoOptions.cache_only_methods",
+              fmt::format("{}", fmt::join(cache_only_methods, ",")), "needs a cache");
 }
 
 namespace {
@@ -51,6 +55,10 @@ void SaveOutputs(const EvalStereoOptions& options, const StereoScene& scene,
 }
 
 std::string Fmt2(double v) { return fmt::format("{:.2f}", v); }
+
+bool Contains(const std::vector<std::string>& list, const std::string& item) {
+  return std::find(list.begin(), list.end(), item) != list.end();
+}
 
 }  // namespace
 
@@ -140,6 +148,28 @@ EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
         matcher_options.threads = options.threads;
         matcher_options.params = ParamsForMethod(options.params, method);
         auto matcher = CreateMatcher(method, matcher_options);
+        const std::string cell = fmt::format("{}/{} {} {}", ref.set, ref.name, noise_label, method);
+        nlohmann::json key;
+        if (options.cache) {
+          key = MakeResultCacheKey(scene, method, matcher->Settings(), noise, options.noise_seed,
+                                   left, right);
+          const bool read = Contains(options.cache_read_methods, "*") ||
+                            Contains(options.cache_read_methods, method) ||
+                            Contains(options.cache_only_methods, method);
+          if (read) {
+            if (auto cached = options.cache->Find(key)) {
+              report.results.push_back(std::move(*cached));
+              if (progress) progress->Advance(1, cell + " (cached)");
+              continue;
+            }
+          }
+        }
+        if (Contains(options.cache_only_methods, method)) {
+          report.missing.push_back(
+              fmt::format("{}/{}/{}/{}", ref.set, ref.name, noise_label, method));
+          if (progress) progress->Advance(1, cell + " (not cached, skipped)");
+          continue;
+        }
         Stopwatch watch;
         const cv::Mat disparity = matcher->Compute(left, right);
         const double ms = watch.ElapsedMs();
@@ -160,10 +190,9 @@ EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
           result.regions[region] = ComputeDisparityMetrics(disparity, scene.ground_truth, mask);
         }
         SaveOutputs(options, scene, noise_label, method, disparity);
+        if (options.cache) options.cache->Store(key, result);
         report.results.push_back(std::move(result));
-        if (progress) {
-          progress->Advance(1, fmt::format("{}/{} {} {}", ref.set, ref.name, noise_label, method));
-        }
+        if (progress) progress->Advance(1, cell);
       }
     }
   }
@@ -176,6 +205,12 @@ nlohmann::json EvalStereoReport::ToJson() const {
     nlohmann::json regions = nlohmann::json::object();
     for (const auto& [name, metrics] : r.regions) regions[name] = metrics.ToJson();
     const PrimaryMetric primary = PrimaryMetricFor(r);
+    nlohmann::json measured = nullptr;
+    if (r.from_cache) {
+      measured = {{"commit", r.measured_commit},
+                  {"machine", r.measured_machine},
+                  {"date", r.measured_date}};
+    }
     scenes.push_back({{"set", r.set},
                       {"scene", r.scene},
                       {"method", r.method},
@@ -188,9 +223,11 @@ nlohmann::json EvalStereoReport::ToJson() const {
                       {"mde_per_s", r.mde_s},
                       {"primary", {{"label", primary.label}, {"value", primary.value}}},
                       {"regions", regions},
-                      {"settings", r.settings}});
+                      {"settings", r.settings},
+                      {"from_cache", r.from_cache},
+                      {"cache_measured", measured}});
   }
-  return {{"scenes", scenes}};
+  return {{"scenes", scenes}, {"missing_from_cache", missing}};
 }
 
 namespace {
@@ -272,6 +309,23 @@ std::string EvalStereoReport::ToMarkdown() const {
                                 return MeanPrimary(results, method, noise);
                               });
     out += "\n";
+  }
+  std::string cached;
+  for (const auto& r : results) {
+    if (!r.from_cache) continue;
+    cached += fmt::format("| {} | {} | {} | {} | {} | {} | {} |\n", r.set, r.scene, r.noise,
+                          r.method, r.measured_commit, r.measured_date, r.measured_machine);
+  }
+  if (!cached.empty()) {
+    out +=
+        "Rows taken from the result cache (their metrics and ms were measured by an earlier "
+        "run):\n\n| set | scene | noise | method | commit | date | machine |\n"
+        "|---|---|---|---|---|---|---|\n" +
+        cached + "\n";
+  }
+  if (!missing.empty()) {
+    out += fmt::format("Not run (cache-only methods without a cache entry): {}.\n\n",
+                       fmt::join(missing, ", "));
   }
   return out;
 }

@@ -19,6 +19,7 @@
 namespace linesight {
 
 class ProgressBar;
+class ResultCache;
 
 struct EvalStereoOptions {
   std::vector<std::string> methods = {"sgbm"};  // factory names (CreateMatcher)
@@ -37,6 +38,14 @@ struct EvalStereoOptions {
   // If set: colour disparity and error maps per scene/method (same folder scheme), and summary
   // plots.
   std::filesystem::path plots_dir;
+  // Result cache (result_cache.h); null = none. Every result computed is stored in it; the methods
+  // in `cache_read_methods` ("*" = every method, empty = none) take their result from it on an
+  // exact key match instead of running (their disparity maps are then not saved or plotted).
+  const ResultCache* cache = nullptr;
+  std::vector<std::string> cache_read_methods = {"*"};
+  // Methods that only come from the cache: a cell without an entry is not run but listed in
+  // EvalStereoReport::missing (for a page that must not wait hours for gc).
+  std::vector<std::string> cache_only_methods;
 
   void Check() const;
 };
@@ -50,6 +59,9 @@ struct EvalStereoResult {
   std::map<std::string, DisparityMetrics>
       regions;  // "nonocc", "all", "disc" where the set has them
   nlohmann::json settings;
+  // Set when the result came from a ResultCache: the run that measured it (ms included).
+  bool from_cache = false;
+  std::string measured_commit, measured_machine, measured_date;
 };
 
 // The benchmark's headline figure for a set ("bad-1 nonocc" for Middlebury 2001/2003, "bad-2
@@ -96,6 +108,8 @@ std::vector<std::string> UniqueInOrder(const std::vector<EvalStereoResult>& resu
 
 struct EvalStereoReport {
   std::vector<EvalStereoResult> results;  // scene-major, then method in the requested order
+  // Cells of cache_only_methods that had no cache entry, as "set/scene/noise/method".
+  std::vector<std::string> missing;
   nlohmann::json ToJson() const;
   // One markdown table per set and noise setting (rows scene x method) followed by the per-set
   // averages per method, and, when several noise settings ran, a method x noise table of the

@@ -42,6 +42,22 @@ nlohmann::json DisparityMetrics::ToJson() const {
   return json;
 }
 
+DisparityMetrics DisparityMetrics::FromJson(const nlohmann::json& json) {
+  DisparityMetrics m;
+  m.evaluated = json.at("evaluated").get<int64_t>();
+  m.estimated = json.at("estimated").get<int64_t>();
+  m.density = json.at("density").get<double>();
+  for (size_t i = 0; i < kBadThresholds.size(); ++i) {
+    m.bad[i] = json.at(BadKey(kBadThresholds[i])).get<double>();
+    m.bad_sparse[i] = json.at(BadKey(kBadThresholds[i], true)).get<double>();
+  }
+  m.d1 = json.at("d1").get<double>();
+  m.d1_sparse = json.at("d1_sparse").get<double>();
+  m.avgerr = json.at("avgerr").get<double>();
+  m.rmse = json.at("rmse").get<double>();
+  return m;
+}
+
 DisparityMetrics ComputeDisparityMetrics(const cv::Mat& disparity, const cv::Mat& ground_truth,
                                          const cv::Mat& mask) {
   if (disparity.type() != CV_32FC1) {

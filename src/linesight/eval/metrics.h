@@ -32,6 +32,9 @@ struct DisparityMetrics {
   // bad_1_sparse, bad_2_sparse, bad_4_sparse, d1_sparse, avgerr, rmse (percentages in percent,
   // errors in px).
   nlohmann::json ToJson() const;
+  // Inverse of ToJson; throws nlohmann::json::exception when a key is missing or has the wrong
+  // type.
+  static DisparityMetrics FromJson(const nlohmann::json& json);
 };
 
 // Compares `disparity` (CV_32FC1, non-finite = no estimate) with `ground_truth` (CV_32FC1,

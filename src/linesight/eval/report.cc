@@ -25,6 +25,7 @@
 #include "linesight/eval/dataset.h"
 #include "linesight/eval/eval_stereo.h"
 #include "linesight/eval/plot.h"
+#include "linesight/eval/result_cache.h"
 #include "linesight/eval/sweep.h"
 #include "linesight/stereo/matcher.h"
 
@@ -42,6 +43,8 @@ void ReportOptions::Check() const {
               "must be >= 0");
   CheckOption(threads >= 0, "ReportOptions.threads", threads, "must be >= 0");
   CheckOption(gc_jobs >= 0, "ReportOptions.gc_jobs", gc_jobs, "must be >= 0 (0 = all cores)");
+  CheckOption(!gc_cached_only || !cache_dir.empty(), "ReportOptions.gc_cached_only", "true",
+              "needs a cache folder (--cache)");
   if (obstacles) obstacle_images.Check();
 }
 
@@ -141,11 +144,13 @@ int GcJobs(const ReportOptions& options) {
 // gc on every (scene, noise) pair, single-threaded runs side by side on GcJobs() threads. Every
 // run is independent (own matcher, noise seeded per scene and view), so the results do not depend
 // on the number of jobs; the first error is rethrown after all threads have stopped.
+// Cache-only mode (options.gc_cached_only): cells without an entry go to `missing`.
 std::vector<EvalStereoResult> RunGcJobs(const std::vector<SceneRef>& scenes,
                                         const std::vector<NoiseSpec>& noise,
-                                        const ReportOptions& options, ProgressBar* progress) {
+                                        const ReportOptions& options, const ResultCache* cache,
+                                        ProgressBar* progress, std::vector<std::string>* missing) {
   const size_t count = scenes.size() * noise.size();
-  std::vector<std::vector<EvalStereoResult>> slots(count);
+  std::vector<EvalStereoReport> slots(count);
   std::vector<std::exception_ptr> errors(count);
   std::atomic<size_t> next{0};
   std::atomic<bool> failed{false};
@@ -157,7 +162,10 @@ std::vector<EvalStereoResult> RunGcJobs(const std::vector<SceneRef>& scenes,
         eval.noise = {noise[job % noise.size()]};
         eval.noise_seed = options.noise_seed;
         eval.threads = 1;
-        slots[job] = RunEvalStereo({scenes[job / noise.size()]}, eval, progress).results;
+        eval.cache = cache;
+        eval.cache_read_methods = options.cache_read_methods;
+        if (options.gc_cached_only) eval.cache_only_methods = {"gc"};
+        slots[job] = RunEvalStereo({scenes[job / noise.size()]}, eval, progress);
       } catch (...) {
         errors[job] = std::current_exception();
         failed = true;
@@ -173,7 +181,10 @@ std::vector<EvalStereoResult> RunGcJobs(const std::vector<SceneRef>& scenes,
     if (e) std::rethrow_exception(e);
   }
   std::vector<EvalStereoResult> results;
-  for (auto& slot : slots) results.insert(results.end(), slot.begin(), slot.end());
+  for (auto& slot : slots) {
+    results.insert(results.end(), slot.results.begin(), slot.results.end());
+    missing->insert(missing->end(), slot.missing.begin(), slot.missing.end());
+  }
   return results;
 }
 
@@ -183,7 +194,9 @@ std::vector<EvalStereoResult> RunStudy(const std::vector<SceneRef>& scenes,
                                        const std::vector<std::string>& methods,
                                        const std::vector<NoiseSpec>& noise,
                                        const std::vector<std::string>& gc_sets,
-                                       const ReportOptions& options, const std::string& label) {
+                                       const ReportOptions& options, const ResultCache* cache,
+                                       const std::string& label,
+                                       std::vector<std::string>* missing) {
   std::vector<std::string> fast;
   bool gc = false;
   for (const std::string& m : methods) {
@@ -205,11 +218,13 @@ std::vector<EvalStereoResult> RunStudy(const std::vector<SceneRef>& scenes,
     eval.noise_seed = options.noise_seed;
     eval.threads = options.threads;
     eval.methods = fast;
+    eval.cache = cache;
+    eval.cache_read_methods = options.cache_read_methods;
     auto r = RunEvalStereo(scenes, eval, progress.get()).results;
     results.insert(results.end(), r.begin(), r.end());
   }
   if (!gc_scenes.empty()) {
-    auto r = RunGcJobs(gc_scenes, noise, options, progress.get());
+    auto r = RunGcJobs(gc_scenes, noise, options, cache, progress.get(), missing);
     results.insert(results.end(), r.begin(), r.end());
   }
   progress->Finish();
@@ -406,6 +421,26 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
       if (r.set == set) label = PrimaryMetricFor(r).label;
     }
     out += fmt::format("**{}** ({}):\n\n", set, label) + table(set, nullptr);
+    // A row that averages fewer scenes than the set has is not comparable with the others: say so.
+    std::set<std::string> set_scenes;
+    for (const auto& r : noisy) {
+      if (r.set == set) set_scenes.insert(SceneKey(r));
+    }
+    std::vector<std::string> partial;
+    for (const std::string& method : methods) {
+      for (const std::string& l : labels) {
+        size_t n = 0;
+        for (const std::string& key : ScenesOf(noisy, method, l)) n += set_scenes.count(key);
+        if (n > 0 && n < set_scenes.size()) {
+          partial.push_back(
+              fmt::format("{} at {}: {} of {} scenes", method, l, n, set_scenes.size()));
+        }
+      }
+    }
+    if (!partial.empty()) {
+      out += fmt::format("Partial rows (mean over fewer scenes than the set has): {}.\n\n",
+                         fmt::join(partial, "; "));
+    }
   }
   // Every scene: the acceptance asks for every method on every scene at every setting.
   out += "<details><summary>Per scene (headline error of the scene's set, dense %)</summary>\n\n";
@@ -608,6 +643,74 @@ std::string ConclusionSection(const std::vector<EvalStereoResult>& bench,
   return out + "\n";
 }
 
+// Section 7: every row taken from the result cache, with the run that measured it, and the cells
+// that are missing.
+std::string CacheSection(const std::vector<EvalStereoResult>& bench,
+                         const std::vector<EvalStereoResult>& noisy,
+                         const std::vector<std::string>& missing) {
+  std::string out = "## 7. Rows from the result cache\n\n";
+  std::string rows;
+  std::set<std::string> seen;
+  int n = 0;
+  double ms = 0;
+  for (const std::vector<EvalStereoResult>* list :
+       {&bench, static_cast<const std::vector<EvalStereoResult>*>(&noisy)}) {
+    for (const EvalStereoResult& r : *list) {
+      if (!r.from_cache) continue;
+      const std::string cell = SceneKey(r) + "/" + r.noise + "/" + r.method;
+      if (!seen.insert(cell).second) continue;  // clean rows appear in both lists
+      rows += fmt::format("| {} | {} | {} | {} | {:.1f} | {} | {} | {} |\n", r.set, r.scene,
+                          r.noise, r.method, r.ms / 1000.0, r.measured_commit, r.measured_date,
+                          r.measured_machine);
+      ++n;
+      ms += r.ms;
+    }
+  }
+  if (n == 0) {
+    out += "No row of this page came from the cache.\n\n";
+  } else {
+    out += fmt::format(
+               "{} row(s), {:.0f} s of measured compute in total. Their metrics and times are "
+               "those of the run named here (times of cached gc rows: one single-threaded run, "
+               "niced, on a machine shared with other work).\n\n",
+               n, ms / 1000.0) +
+           "| set | scene | noise | method | s | measured by commit | date | machine |\n"
+           "|---|---|---|---|---|---|---|---|\n" +
+           rows + "\n";
+  }
+  if (missing.empty()) {
+    out += "No cell is missing.\n\n";
+  } else {
+    out += fmt::format(
+        "**Missing** ({} cell(s): gc was read from the cache only and these have no entry yet; "
+        "fill them with `linesight eval stereo --methods gc --threads 1 --cache DIR --sets SET "
+        "--noise clean,gauss:0.1,gauss:0.2,sp:0.15,sp:0.35`):\n\n",
+        missing.size());
+    // One line per scene and method: "set/scene (method): noise, noise".
+    std::vector<std::pair<std::string, std::vector<std::string>>> by_scene;
+    for (const std::string& m : missing) {
+      // m = set/scene/noise/method; noise labels hold no '/'.
+      const auto method_at = m.rfind('/');
+      const auto noise_at = m.rfind('/', method_at - 1);
+      const std::string scene =
+          fmt::format("{} ({})", m.substr(0, noise_at), m.substr(method_at + 1));
+      const std::string noise = m.substr(noise_at + 1, method_at - noise_at - 1);
+      auto it = std::find_if(by_scene.begin(), by_scene.end(),
+                             [&](const auto& entry) { return entry.first == scene; });
+      if (it == by_scene.end()) {
+        by_scene.push_back({scene, {}});
+        it = by_scene.end() - 1;
+      }
+      it->second.push_back(noise);
+    }
+    for (const auto& [scene, noises] : by_scene) {
+      out += fmt::format("- `{}`: {}\n", scene, fmt::join(noises, ", "));
+    }
+    out += "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string GenerateReport(const ReportOptions& options) {
@@ -636,6 +739,11 @@ std::string GenerateReport(const ReportOptions& options) {
     sweep_scenes = SelectSets(bench_scenes, {set}, "--sweep-sets");
   }
   fs::create_directories(options.out_dir);
+  std::optional<ResultCache> cache;
+  if (!options.cache_dir.empty()) {
+    cache.emplace(options.cache_dir, options.commit, MachineDescription());
+  }
+  std::vector<std::string> missing;  // gc cells without a cache entry (gc_cached_only)
   const Provenance prov{options.command_line, options.data_dir.string(), MachineDescription(),
                         options.commit, UtcNow()};
   const bool run_gc =
@@ -643,7 +751,9 @@ std::string GenerateReport(const ReportOptions& options) {
   const bool gc_everywhere =
       std::find(options.gc_sets.begin(), options.gc_sets.end(), "*") != options.gc_sets.end() ||
       SelectSets(bench_scenes, options.gc_sets, "--gc-sets").size() == bench_scenes.size();
-  const std::string gc_note =
+  const bool gc_from_cache = !options.cache_dir.empty() &&
+                             (InSets(options.cache_read_methods, "gc") || options.gc_cached_only);
+  std::string gc_note =
       !run_gc
           ? "gc was not run."
           : fmt::format(
@@ -653,6 +763,16 @@ std::string GenerateReport(const ReportOptions& options) {
                 gc_everywhere ? std::string("every set")
                               : fmt::format("the sets {} only", fmt::join(options.gc_sets, ", ")),
                 GcJobs(options));
+  if (run_gc && options.gc_cached_only) {
+    gc_note =
+        "gc (graph cuts) was not run by this page: every gc row comes from the result cache "
+        "(--gc-cached-only) and carries the time of the single-threaded run that measured it; "
+        "section 7 names its commit, machine and date, and lists the gc cells still missing.";
+  } else if (run_gc && gc_from_cache) {
+    gc_note +=
+        " gc rows taken from the result cache carry the time of the run that measured them "
+        "(section 7 names its commit, machine and date).";
+  }
 
   // gc's noise runs: on the scenes of both gc_sets and gc_noise_sets.
   std::set<std::string> gc_noise_keys;
@@ -662,6 +782,7 @@ std::string GenerateReport(const ReportOptions& options) {
   }
   const bool gc_noise_everywhere = gc_noise_keys.size() == noise_scenes.size();
   std::string gc_noise_note = gc_note;
+
   if (run_gc && !gc_noise_everywhere) {
     gc_noise_note += fmt::format(
         " In this noise study gc ran only on the sets {} (the gc row averages those scenes only, "
@@ -670,8 +791,9 @@ std::string GenerateReport(const ReportOptions& options) {
   }
 
   // 2. Benchmarks (clean).
-  const std::vector<EvalStereoResult> bench = RunStudy(bench_scenes, options.methods, {NoiseSpec()},
-                                                       options.gc_sets, options, "benchmarks");
+  const std::vector<EvalStereoResult> bench =
+      RunStudy(bench_scenes, options.methods, {NoiseSpec()}, options.gc_sets, options,
+               cache ? &*cache : nullptr, "benchmarks", &missing);
   // 3. Noise (clean results reused from the benchmark run).
   std::vector<NoiseSpec> noisy_specs(options.noise.begin() + 1, options.noise.end());
   std::vector<EvalStereoResult> noisy;
@@ -690,8 +812,8 @@ std::string GenerateReport(const ReportOptions& options) {
         gc_noise_sets.push_back(set);
       }
     }
-    const auto extra =
-        RunStudy(noise_scenes, options.methods, noisy_specs, gc_noise_sets, options, "noise");
+    const auto extra = RunStudy(noise_scenes, options.methods, noisy_specs, gc_noise_sets, options,
+                                cache ? &*cache : nullptr, "noise", &missing);
     noisy.insert(noisy.end(), extra.begin(), extra.end());
   }
   // 4. Parameter study.
@@ -734,10 +856,30 @@ std::string GenerateReport(const ReportOptions& options) {
       "(threads = {}) on a machine that may have been shared with other work; compare methods "
       "within this page only.\n- **Methods**: {}. {}\n\nSections: 1. comparison table · 2. "
       "benchmark tables · 3. noise robustness · 4. parameter study · 5. obstacle images · 6. "
-      "conclusion.\n\n",
+      "conclusion{}.\n\n",
       prov.command, prov.date, prov.commit, prov.data, bench_scenes.size(),
       fmt::join(UniqueInOrder(bench, [](const auto& r) { return r.set; }), ", "), prov.machine,
-      options.threads, fmt::join(options.methods, ", "), gc_note);
+      options.threads, fmt::join(options.methods, ", "), gc_note,
+      cache ? " · 7. rows from the result cache" : "");
+  std::set<std::string> cached_cells;  // clean rows are in both lists: count each cell once
+  for (const std::vector<EvalStereoResult>* list :
+       {&bench, static_cast<const std::vector<EvalStereoResult>*>(&noisy)}) {
+    for (const EvalStereoResult& r : *list) {
+      if (r.from_cache) cached_cells.insert(SceneKey(r) + "/" + r.noise + "/" + r.method);
+    }
+  }
+  const size_t cached_rows = cached_cells.size();
+  if (cache) {
+    page += fmt::format(
+        "**Result cache** `{}`: methods read from it: {}; {} benchmark/noise row(s) of this page "
+        "come from it (measured by earlier runs: their commit, machine and date are listed in "
+        "section 7), the rest were measured by this run.{}\n\n",
+        options.cache_dir.string(), fmt::join(options.cache_read_methods, ", "), cached_rows,
+        missing.empty() ? std::string()
+                        : fmt::format(" **{} gc cell(s) are missing** (not in the cache, not run; "
+                                      "listed in section 7).",
+                                      missing.size()));
+  }
   page += ComparisonSection(bench, options.methods, prov);
 
   page += "## 2. Stereo benchmarks (clean)\n\n" + gc_note + "\n\n";
@@ -791,6 +933,7 @@ std::string GenerateReport(const ReportOptions& options) {
   }
   page += ConclusionSection(bench, noisy, noise_labels, options.methods, sweep ? &*sweep : nullptr,
                             obstacles ? &*obstacles : nullptr);
+  if (cache) page += CacheSection(bench, noisy, missing);
   WriteTextAtomic(options.out_dir / "README.md", page);
   return page;
 }

@@ -53,6 +53,15 @@ struct ReportOptions {
   ObstacleImageOptions obstacle_images;
   uint64_t noise_seed = 1;
   int threads = 0;  // matcher threads, 0 = all cores
+  // Result cache (result_cache.h), e.g. /work/cache/eval; empty = none. Every benchmark and noise
+  // result computed is stored there; the methods in `cache_read_methods` ("*" = all) take theirs
+  // from it on an exact key match. The default reads only gc (hours), so the other methods' times
+  // come from this run. The page lists every cached row with the commit, machine and date that
+  // measured it.
+  std::filesystem::path cache_dir;
+  std::vector<std::string> cache_read_methods = {"gc"};
+  // gc only from the cache: a gc cell without an entry is not run; the page lists it as missing.
+  bool gc_cached_only = false;
   // Provenance printed with every figure.
   std::string command_line = "linesight eval report";
   std::string commit = "unknown";  // git commit of the sources (GitDescription)

@@ -41,6 +41,16 @@ SweepParameter WithCentre(SweepParameter p, double centre) {
   return p;
 }
 
+// The plane-fit inlier thresholds swept for isgm: those not above the outlier threshold (the
+// refinement requires inlier <= outlier, and varying both would not be one parameter at a time).
+std::vector<std::string> InlierValuesUpTo(double outlier_threshold) {
+  std::vector<std::string> out;
+  for (const char* v : {"0.25", "0.35", "0.5", "0.75", "1", "1.5", "2"}) {
+    if (std::stod(v) <= outlier_threshold) out.push_back(v);
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<SweepParameter> DefaultSweepParameters(const std::string& method) {
@@ -64,7 +74,7 @@ std::vector<SweepParameter> DefaultSweepParameters(const std::string& method) {
             WithCentre({method, "p2", {"60", "80", "100", "130", "160", "190", "250"}, ""}, sgm.p2),
             WithCentre({method, "superpixel_size", {"6", "8", "10", "12", "16", "20", "24"}, ""},
                        refine.superpixels.region_size),
-            WithCentre({method, "plane_inlier", {"0.25", "0.5", "0.75", "1", "1.5", "2"}, ""},
+            WithCentre({method, "plane_inlier", InlierValuesUpTo(refine.outlier_threshold), ""},
                        refine.inlier_threshold)};
   }
   if (method == "sgm") {

@@ -5,6 +5,7 @@
 #include "linesight/core/error.h"
 #include "linesight/eval/eval_stereo.h"
 #include "linesight/eval/synthetic_scenes_test_util.h"
+#include "linesight/stereo/matcher.h"
 
 namespace linesight {
 namespace {
@@ -30,6 +31,24 @@ TEST(SweepTest, DefaultParametersOfSgbmMatchTheStudy) {
   EXPECT_EQ(keys, (std::vector<std::string>{kSweepNumDisparitiesKey, "p1", "p2", "superpixel_size",
                                             "plane_inlier"}));
   EXPECT_TRUE(DefaultSweepParameters("nonexistent").empty());
+}
+
+TEST(SweepTest, EveryDefaultSweepValueIsAValidSetting) {
+  // A swept value the matcher rejects would abort `eval report` after minutes of work (isgm's
+  // plane_inlier above its outlier threshold did).
+  for (const std::string& method : MatcherNames()) {
+    for (const SweepParameter& p : DefaultSweepParameters(method)) {
+      if (p.key == kSweepNumDisparitiesKey) continue;
+      for (const std::string& value : p.values) {
+        MatcherOptions o;
+        o.params = {{p.key, value}};
+        EXPECT_NO_THROW(CreateMatcher(method, o)) << method << " " << p.key << "=" << value;
+      }
+    }
+  }
+  const auto isgm = DefaultSweepParameters("isgm");
+  EXPECT_EQ(isgm.back().key, "plane_inlier");
+  EXPECT_GE(isgm.back().values.size(), 4u);
 }
 
 TEST(SweepTest, DefaultsValidAndBadOptionsRejected) {

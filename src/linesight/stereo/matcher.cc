@@ -8,6 +8,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/stereo/algorithm_version.h"
 #include "linesight/stereo/graph_cut.h"
 #include "linesight/stereo/isgm.h"
 #include "linesight/stereo/opencv_matchers.h"
@@ -26,6 +27,19 @@ void MatcherOptions::Check() const {
 }
 
 std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm", "isgm", "gc"}; }
+
+int MatcherAlgorithmVersion(const std::string& method) {
+  // One line per method; see algorithm_version.h for when to bump. OpenCV's methods (bm, sgbm,
+  // sgbm-wls) depend on the installed OpenCV too, whose version the cache key records separately.
+  static const std::map<std::string, int> kVersions = {{"bm", 1},  {"sgbm", 1}, {"sgbm-wls", 1},
+                                                       {"sgm", 1}, {"isgm", 1}, {"gc", 1}};
+  const auto it = kVersions.find(method);
+  if (it == kVersions.end()) {
+    throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
+                                 fmt::join(MatcherNames(), ", ")));
+  }
+  return it->second;
+}
 
 std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
                                              const MatcherOptions& options) {

@@ -5,6 +5,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/stereo/algorithm_version.h"
 
 namespace linesight {
 namespace {
@@ -36,6 +37,12 @@ TEST(CreateMatcher, UnknownMethodIsUsageErrorListingMethods) {
     EXPECT_NE(std::string(e.what()).find("unknown method 'magic'"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("sgbm"), std::string::npos);
   }
+}
+
+TEST(MatcherAlgorithmVersion, EveryMethodHasOneAndUnknownIsUsageError) {
+  // eval's result cache keys on it: a method without a version could not be cached.
+  for (const std::string& method : MatcherNames()) EXPECT_GE(MatcherAlgorithmVersion(method), 1);
+  EXPECT_THROW(MatcherAlgorithmVersion("nonexistent"), UsageError);
 }
 
 TEST(CreateMatcher, UnknownParameterIsUsageError) {
