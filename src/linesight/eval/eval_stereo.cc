@@ -202,8 +202,6 @@ EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
 nlohmann::json EvalStereoReport::ToJson() const {
   nlohmann::json scenes = nlohmann::json::array();
   for (const EvalStereoResult& r : results) {
-    nlohmann::json regions = nlohmann::json::object();
-    for (const auto& [name, metrics] : r.regions) regions[name] = metrics.ToJson();
     const PrimaryMetric primary = PrimaryMetricFor(r);
     nlohmann::json measured = nullptr;
     if (r.from_cache) {
@@ -211,21 +209,11 @@ nlohmann::json EvalStereoReport::ToJson() const {
                   {"machine", r.measured_machine},
                   {"date", r.measured_date}};
     }
-    scenes.push_back({{"set", r.set},
-                      {"scene", r.scene},
-                      {"method", r.method},
-                      {"noise", r.noise},
-                      {"width", r.width},
-                      {"height", r.height},
-                      {"min_disparity", r.min_disparity},
-                      {"num_disparities", r.num_disparities},
-                      {"ms", r.ms},
-                      {"mde_per_s", r.mde_s},
-                      {"primary", {{"label", primary.label}, {"value", primary.value}}},
-                      {"regions", regions},
-                      {"settings", r.settings},
-                      {"from_cache", r.from_cache},
-                      {"cache_measured", measured}});
+    nlohmann::json row = EvalStereoResultToJson(r);
+    row["primary"] = {{"label", primary.label}, {"value", primary.value}};
+    row["from_cache"] = r.from_cache;
+    row["cache_measured"] = measured;
+    scenes.push_back(std::move(row));
   }
   return {{"scenes", scenes}, {"missing_from_cache", missing}};
 }

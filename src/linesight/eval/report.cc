@@ -4,7 +4,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <exception>
 #include <fstream>
 #include <iterator>
@@ -104,15 +103,6 @@ std::string GitDescription(const fs::path& dir) {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char text[64];
-  std::strftime(text, sizeof(text), "%Y-%m-%d %H:%M UTC", &tm);
-  return text;
-}
 
 bool InSets(const std::vector<std::string>& sets, const std::string& set) {
   return std::find(sets.begin(), sets.end(), "*") != sets.end() ||
@@ -745,7 +735,7 @@ std::string GenerateReport(const ReportOptions& options) {
   }
   std::vector<std::string> missing;  // gc cells without a cache entry (gc_cached_only)
   const Provenance prov{options.command_line, options.data_dir.string(), MachineDescription(),
-                        options.commit, UtcNow()};
+                        options.commit, UtcNowText()};
   const bool run_gc =
       std::find(options.methods.begin(), options.methods.end(), "gc") != options.methods.end();
   const bool gc_everywhere =

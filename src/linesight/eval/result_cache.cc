@@ -33,15 +33,6 @@ void Warn(const std::string& message) {
 
 std::string Hex16(uint64_t v) { return fmt::format("{:016x}", v); }
 
-std::string UtcNowIso() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char text[64];
-  std::strftime(text, sizeof(text), "%Y-%m-%d %H:%M UTC", &tm);
-  return text;
-}
-
 // File-name-safe form of a key component (sets, scenes and noise labels are already safe; this
 // guards against a '/' or a leading '.').
 std::string SafeName(const std::string& text) {
@@ -49,23 +40,6 @@ std::string SafeName(const std::string& text) {
   for (char c : text) out += (c == '/' || c == '\\' || c == '\0') ? '_' : c;
   if (out.empty() || out[0] == '.') out.insert(out.begin(), '_');
   return out;
-}
-
-nlohmann::json ResultToJson(const EvalStereoResult& r) {
-  nlohmann::json regions = nlohmann::json::object();
-  for (const auto& [name, metrics] : r.regions) regions[name] = metrics.ToJson();
-  return {{"set", r.set},
-          {"scene", r.scene},
-          {"method", r.method},
-          {"noise", r.noise},
-          {"width", r.width},
-          {"height", r.height},
-          {"min_disparity", r.min_disparity},
-          {"num_disparities", r.num_disparities},
-          {"ms", r.ms},
-          {"mde_per_s", r.mde_s},
-          {"regions", regions},
-          {"settings", r.settings}};
 }
 
 EvalStereoResult ResultFromJson(const nlohmann::json& json) {
@@ -171,9 +145,35 @@ void ResultCache::Store(const nlohmann::json& key, const EvalStereoResult& resul
   }
   const nlohmann::json entry = {
       {"key", key},
-      {"result", ResultToJson(result)},
-      {"measured", {{"commit", commit_}, {"machine", machine_}, {"date", UtcNowIso()}}}};
+      {"result", EvalStereoResultToJson(result)},
+      {"measured", {{"commit", commit_}, {"machine", machine_}, {"date", UtcNowText()}}}};
   WriteTextAtomic(path, entry.dump(1) + "\n");
+}
+
+std::string UtcNowText() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char text[64];
+  std::strftime(text, sizeof(text), "%Y-%m-%d %H:%M UTC", &tm);
+  return text;
+}
+
+nlohmann::json EvalStereoResultToJson(const EvalStereoResult& r) {
+  nlohmann::json regions = nlohmann::json::object();
+  for (const auto& [name, metrics] : r.regions) regions[name] = metrics.ToJson();
+  return {{"set", r.set},
+          {"scene", r.scene},
+          {"method", r.method},
+          {"noise", r.noise},
+          {"width", r.width},
+          {"height", r.height},
+          {"min_disparity", r.min_disparity},
+          {"num_disparities", r.num_disparities},
+          {"ms", r.ms},
+          {"mde_per_s", r.mde_s},
+          {"regions", regions},
+          {"settings", r.settings}};
 }
 
 }  // namespace linesight

@@ -32,6 +32,13 @@ namespace linesight {
 // key. Bump it when a metric's definition changes.
 inline constexpr int kEvalMetricsVersion = 1;
 
+// The current time as "YYYY-MM-DD HH:MM UTC" (entries' and pages' dates).
+std::string UtcNowText();
+
+// The measured fields of one result (set, scene, method, noise, size, range, time, region metrics,
+// settings): a cache entry's result and the core of each scene row of `eval stereo --json`.
+nlohmann::json EvalStereoResultToJson(const EvalStereoResult& r);
+
 // FNV-1a 64 of an image's type, size and pixel bytes, as 16 hex digits.
 std::string ImageFingerprint(const cv::Mat& image);
 
