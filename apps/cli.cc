@@ -1,5 +1,6 @@
 #include "cli.h"
 
+#include <cmath>
 #include <cstdio>
 #include <exception>
 
@@ -67,6 +68,60 @@ void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* opti
   app.add_option("--synthetic-supersampling", options->synthetic_supersampling,
                  "synthetic source: rays per pixel side (1 = fastest)")
       ->capture_default_str();
+}
+
+void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
+  app.add_option("--ranging", *raw,
+                 "ranging setting key=value (repeatable): near_percentile, core_fraction, "
+                 "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
+                 "min_body_width_px, smoothing_radius_px, checked (0|1), "
+                 "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2), "
+                 "surface_band_relative");
+}
+
+void ApplyRangingSettings(const std::vector<std::string>& settings,
+                          RangingPipelineOptions* options_out) {
+  RangingPipelineOptions& options = *options_out;
+  for (const std::string& setting : settings) {
+    const size_t eq = setting.find('=');
+    const std::string key = setting.substr(0, eq);
+    double value = 0.0;
+    try {
+      size_t used = 0;
+      const std::string text = eq == std::string::npos ? "" : setting.substr(eq + 1);
+      value = std::stod(text, &used);
+      if (used != text.size() || !std::isfinite(value)) throw std::invalid_argument(text);
+    } catch (const std::exception&) {
+      throw UsageError(fmt::format("--ranging '{}': expected key=value with a number", setting));
+    }
+    if (key == "near_percentile") {
+      options.ranging.near_percentile = value;
+    } else if (key == "core_fraction") {
+      options.ranging.core_fraction = value;
+    } else if (key == "silhouette_margin_x_px") {
+      options.ranging.silhouette_margin_x_px = int(value);
+    } else if (key == "silhouette_margin_y_px") {
+      options.ranging.silhouette_margin_y_px = int(value);
+    } else if (key == "min_body_width_m") {
+      options.ranging.min_body_width_m = value;
+    } else if (key == "min_body_width_px") {
+      options.ranging.min_body_width_px = value;
+    } else if (key == "smoothing_radius_px") {
+      options.ranging.smoothing_radius_px = int(value);
+    } else if (key == "checked") {
+      options.range_on_checked_disparity = value != 0.0;
+    } else if (key == "model_relative_sigma") {
+      options.model_relative_sigma = value;
+    } else if (key == "surface_refinement") {
+      options.surface_refinement = int(value);
+    } else if (key == "surface_band_relative") {
+      options.ranging.surface_band_relative = value;
+    } else if (key == "search_from_zero") {
+      options.search_from_zero = value != 0.0;
+    } else {
+      throw UsageError(fmt::format("--ranging '{}': expected key=value with a known key", setting));
+    }
+  }
 }
 
 }  // namespace linesight::cli

@@ -14,6 +14,7 @@
 #include "linesight/acquire/frame_source.h"
 #include "linesight/core/atomic_file.h"
 #include "linesight/io/json_io.h"
+#include "linesight/ranging/pipeline.h"
 
 namespace linesight::cli {
 
@@ -30,6 +31,12 @@ int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>
 void AddParamOption(CLI::App& app, std::vector<std::string>* raw);
 // "p1=8,p2=32" / ["p1=8","p2=32"] -> {p1: 8, p2: 32}; throws UsageError for an entry without '='.
 std::map<std::string, std::string> ParseParams(const std::vector<std::string>& raw);
+
+// --ranging key=value settings of the ranging chain (eval ranging, eval plates); Apply throws
+// UsageError naming an unknown key or a value that is not a number.
+void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw);
+void ApplyRangingSettings(const std::vector<std::string>& settings,
+                          RangingPipelineOptions* options);
 
 // Adds --source and the capture options (--width --height --fps --loop --synthetic-*) of
 // `serve` and `acquire`.

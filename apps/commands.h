@@ -20,6 +20,7 @@ int RunRender(int argc, char** argv);
 int RunEvalSweep(int argc, char** argv);      // `linesight eval sweep`, dispatched by eval.cc
 int RunEvalReport(int argc, char** argv);     // `linesight eval report`, dispatched by eval.cc
 int RunEvalObstacles(int argc, char** argv);  // `linesight eval obstacles`, dispatched by eval.cc
+int RunEvalPlates(int argc, char** argv);     // `linesight eval plates`, dispatched by eval.cc
 int RunServe(int argc, char** argv);
 int RunAcquire(int argc, char** argv);
 

@@ -123,6 +123,8 @@ constexpr Study kStudies[] = {
      "ranging accuracy on rendered power-line scenes + Middlebury metric depth"},
     {"sweep", RunEvalSweep, "parameter study: one parameter at a time (SGBM family, isgm)"},
     {"obstacles", RunEvalObstacles, "matchers on rendered damper / clamp / insulator crops"},
+    {"plates", RunEvalPlates,
+     "ranging on an independent renderer's plates / boxes (photograph textures)"},
     {"report", RunEvalReport, "run every study and write docs/results/README.md"},
 };
 

@@ -414,12 +414,7 @@ int RunEvalRanging(int argc, char** argv) {
   app.add_option("--threads", options.threads, "matcher threads (0 = all)")->capture_default_str();
   app.add_option("--middlebury", middlebury_dir, "Middlebury 2014 scene folder ('' to skip)")
       ->capture_default_str();
-  app.add_option("--ranging", ranging_settings,
-                 "ranging setting key=value (repeatable): near_percentile, core_fraction, "
-                 "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
-                 "min_body_width_px, smoothing_radius_px, checked (0|1), "
-                 "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2), "
-                 "surface_band_relative");
+  AddRangingSettingsOption(app, &ranging_settings);
   app.add_option("--json", json_path, "report (- for stdout)");
   app.add_option("--plot", plot_path, "SVG plot of relative error vs distance");
   app.add_option("--markdown", markdown_path, "write the table as Markdown too");
@@ -431,40 +426,7 @@ int RunEvalRanging(int argc, char** argv) {
   return RunCommand(app, argc, argv, [&] {
     if (runs < 1) throw UsageError("--runs must be >= 1");
     options.params = ParseParams(raw_params);
-    for (const std::string& setting : ranging_settings) {
-      const size_t eq = setting.find('=');
-      const std::string key = setting.substr(0, eq);
-      const double value =
-          eq == std::string::npos ? NAN : ParseDoubles(setting.substr(eq + 1), "--ranging")[0];
-      if (key == "near_percentile") {
-        options.ranging.near_percentile = value;
-      } else if (key == "core_fraction") {
-        options.ranging.core_fraction = value;
-      } else if (key == "silhouette_margin_x_px") {
-        options.ranging.silhouette_margin_x_px = int(value);
-      } else if (key == "silhouette_margin_y_px") {
-        options.ranging.silhouette_margin_y_px = int(value);
-      } else if (key == "min_body_width_m") {
-        options.ranging.min_body_width_m = value;
-      } else if (key == "min_body_width_px") {
-        options.ranging.min_body_width_px = value;
-      } else if (key == "smoothing_radius_px") {
-        options.ranging.smoothing_radius_px = int(value);
-      } else if (key == "checked") {
-        options.range_on_checked_disparity = value != 0.0;
-      } else if (key == "model_relative_sigma") {
-        options.model_relative_sigma = value;
-      } else if (key == "surface_refinement") {
-        options.surface_refinement = int(value);
-      } else if (key == "surface_band_relative") {
-        options.ranging.surface_band_relative = value;
-      } else if (key == "search_from_zero") {
-        options.search_from_zero = value != 0.0;
-      } else {
-        throw UsageError(
-            fmt::format("--ranging '{}': expected key=value with a known key", setting));
-      }
-    }
+    ApplyRangingSettings(ranging_settings, &options);
     const std::vector<double> distances = ParseDoubles(distances_text, "--distances");
     std::vector<sim::ObstacleType> types;
     std::vector<std::string> type_names;
