@@ -134,33 +134,50 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
   int32_t* label = labels->ptr<int32_t>();
   // Horizontal runs of equal labels, in raster order; runs of the same label that touch vertically
   // are united (union-find whose root is the smallest run index, i.e. the piece's first run, whose
-  // first pixel is the piece's first pixel in raster order).
+  // first pixel is the piece's first pixel in raster order). Linking the larger root under the
+  // smaller makes every root the smallest index of its piece whatever the order of the unions, so
+  // row stripes are united in parallel and then joined across the stripe borders.
   struct Run {
-    int32_t start, length, parent;
+    int32_t x0, x1, label, parent;  // columns [x0, x1) of its row
   };
-  // The runs of each row, rows in parallel, then concatenated in raster order.
-  std::vector<std::vector<Run>> row_runs(height);
-  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
-    for (int y = range.start; y < range.end; ++y) {
-      const int32_t* l = label + static_cast<ptrdiff_t>(y) * width;
-      std::vector<Run>& out = row_runs[y];
-      for (int x = 0; x < width;) {
-        int end = x + 1;
-        while (end < width && l[end] == l[x]) ++end;
-        out.push_back({y * width + x, end - x, 0});
-        x = end;
+  const int stripes = std::max(1, std::min(height, 4 * cv::getNumThreads()));
+  auto stripe_begin = [&](int stripe) {
+    return static_cast<int>(static_cast<int64_t>(height) * stripe / stripes);
+  };
+  // The runs of each stripe (in raster order), then concatenated; row_begin[y] = first run of row
+  // y (counted within the stripe, then in the concatenation).
+  std::vector<std::vector<Run>> stripe_runs(stripes);
+  std::vector<int32_t> row_begin(height + 1, 0);
+  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+    for (int stripe = range.start; stripe < range.end; ++stripe) {
+      std::vector<Run>& out = stripe_runs[stripe];
+      out.clear();
+      out.reserve(static_cast<size_t>(stripe_begin(stripe + 1) - stripe_begin(stripe)) * width / 2);
+      for (int y = stripe_begin(stripe); y < stripe_begin(stripe + 1); ++y) {
+        row_begin[y] = static_cast<int32_t>(out.size());
+        const int32_t* l = label + static_cast<ptrdiff_t>(y) * width;
+        for (int x = 0; x < width;) {
+          int end = x + 1;
+          while (end < width && l[end] == l[x]) ++end;
+          out.push_back({x, end, l[x], 0});
+          x = end;
+        }
       }
     }
   });
-  std::vector<int32_t> row_begin(height + 1, 0);
-  for (int y = 0; y < height; ++y) {
-    row_begin[y + 1] = row_begin[y] + static_cast<int32_t>(row_runs[y].size());
+  std::vector<int32_t> stripe_offset(stripes + 1, 0);
+  for (int stripe = 0; stripe < stripes; ++stripe) {
+    stripe_offset[stripe + 1] =
+        stripe_offset[stripe] + static_cast<int32_t>(stripe_runs[stripe].size());
   }
-  std::vector<Run> runs(row_begin[height]);
-  for (int y = 0; y < height; ++y) {
-    std::copy(row_runs[y].begin(), row_runs[y].end(), runs.begin() + row_begin[y]);
+  for (int stripe = 0; stripe < stripes; ++stripe) {
+    for (int y = stripe_begin(stripe); y < stripe_begin(stripe + 1); ++y) {
+      row_begin[y] += stripe_offset[stripe];
+    }
   }
-  for (size_t r = 0; r < runs.size(); ++r) runs[r].parent = static_cast<int32_t>(r);
+  const int count = stripe_offset[stripes];
+  std::vector<Run> runs(count);
+  row_begin[height] = count;
   auto find = [&](int32_t r) {
     while (runs[r].parent != r) {
       runs[r].parent = runs[runs[r].parent].parent;
@@ -168,17 +185,14 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
     }
     return r;
   };
-  for (int y = 1; y < height; ++y) {
-    // Walk the runs of rows y - 1 and y together; overlapping runs with equal labels are united.
+  // Unites the runs of row y with the overlapping runs of equal label in row y - 1.
+  auto unite_rows = [&](int y) {
     int above = row_begin[y - 1];
     for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
-      const int x0 = runs[r].start - y * width, x1 = x0 + runs[r].length;
-      while (above < row_begin[y] &&
-             runs[above].start - (y - 1) * width + runs[above].length <= x0) {
-        ++above;
-      }
-      for (int a = above; a < row_begin[y] && runs[a].start - (y - 1) * width < x1; ++a) {
-        if (label[runs[a].start] != label[runs[r].start]) continue;
+      const int x0 = runs[r].x0, x1 = runs[r].x1, l = runs[r].label;
+      while (above < row_begin[y] && runs[above].x1 <= x0) ++above;
+      for (int a = above; a < row_begin[y] && runs[a].x0 < x1; ++a) {
+        if (runs[a].label != l) continue;
         const int32_t ra = find(a), rr = find(r);
         if (ra < rr) {
           runs[rr].parent = ra;
@@ -187,39 +201,59 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
         }
       }
     }
+  };
+  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
+    for (int stripe = range.start; stripe < range.end; ++stripe) {
+      const int offset = stripe_offset[stripe];
+      const std::vector<Run>& local = stripe_runs[stripe];
+      for (size_t i = 0; i < local.size(); ++i) {
+        runs[offset + i] = local[i];
+        runs[offset + i].parent = offset + static_cast<int32_t>(i);
+      }
+      const int y0 = stripe_begin(stripe), y1 = stripe_begin(stripe + 1);
+      // Rows of this stripe only (the union touches runs of this stripe only).
+      for (int y = y0 + 1; y < y1; ++y) unite_rows(y);
+    }
+  });
+  for (int stripe = 1; stripe < stripes; ++stripe) {
+    const int y = stripe_begin(stripe);
+    if (y > 0 && y < height) unite_rows(y);
   }
-  // Piece sizes at the root runs, then new labels in raster order of the pieces' first pixels. A
-  // small piece joins the piece of the pixel preceding its first pixel (left, else above).
-  const int count = static_cast<int>(runs.size());
+  // Every parent index is at most its run's index, so one pass in index order leaves each run
+  // pointing at its root. Then piece sizes at the roots.
   std::vector<int32_t> root_info(count, 0);
   for (int r = 0; r < count; ++r) {
-    runs[r].parent = find(r);
-    root_info[runs[r].parent] += runs[r].length;
+    runs[r].parent = runs[runs[r].parent].parent;
+    root_info[runs[r].parent] += runs[r].x1 - runs[r].x0;
   }
-  // New labels in raster order (serial: a small piece takes the new label of the pixel before its
-  // first pixel, which an earlier run already decided), then the pixels in parallel.
+  // New labels in raster order of the pieces' first pixels (serial: a small piece takes the new
+  // label of the pixel before its first pixel, left or else above, which an earlier run already
+  // decided), then the pixels in parallel.
   int next = 0;
   std::vector<int32_t> value(count);
-  for (int r = 0; r < count; ++r) {
-    const int p = runs[r].start;
-    if (runs[r].parent != r) {
-      value[r] = root_info[runs[r].parent];
-    } else {
-      const int x = p % width;
+  for (int y = 0; y < height; ++y) {
+    for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
+      if (runs[r].parent != r) {
+        value[r] = root_info[runs[r].parent];
+        continue;
+      }
       // The pixel before: its run is an earlier one, already relabelled.
       int adjacent = -1;
-      if (x > 0) {
+      if (runs[r].x0 > 0) {
         adjacent = value[r - 1];
-      } else if (p >= width) {
-        adjacent = value[row_begin[p / width - 1]];  // the first run of the row above
+      } else if (y > 0) {
+        adjacent = value[row_begin[y - 1]];  // the first run of the row above
       }
       value[r] = root_info[r] < min_size && adjacent >= 0 ? adjacent : next++;
       root_info[r] = value[r];
     }
   }
-  cv::parallel_for_(cv::Range(0, count), [&](const cv::Range& range) {
-    for (int r = range.start; r < range.end; ++r) {
-      std::fill(label + runs[r].start, label + runs[r].start + runs[r].length, value[r]);
+  cv::parallel_for_(cv::Range(0, height), [&](const cv::Range& range) {
+    for (int y = range.start; y < range.end; ++y) {
+      int32_t* row = label + static_cast<ptrdiff_t>(y) * width;
+      for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
+        std::fill(row + runs[r].x0, row + runs[r].x1, value[r]);
+      }
     }
   });
   return next;

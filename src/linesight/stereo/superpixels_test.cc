@@ -270,9 +270,18 @@ TEST(EnforceConnectivity, EqualsNaiveFloodFillOnAwkwardSizes) {
       }
       cv::Mat expected = labels.clone();
       const int n_expected = NaiveEnforceConnectivity(&expected, min_size);
-      const int n = detail::EnforceConnectivity(&labels, min_size);
-      EXPECT_EQ(n, n_expected) << size << " min_size " << min_size;
-      EXPECT_EQ(cv::countNonZero(labels != expected), 0) << size << " min_size " << min_size;
+      // The row stripes that are united in parallel follow the thread count (4 per thread): the
+      // result must not.
+      const int saved_threads = cv::getNumThreads();
+      for (int threads : {1, 2, 3, 16}) {
+        cv::setNumThreads(threads);
+        cv::Mat result = labels.clone();
+        const int n = detail::EnforceConnectivity(&result, min_size);
+        EXPECT_EQ(n, n_expected) << size << " min_size " << min_size << " threads " << threads;
+        EXPECT_EQ(cv::countNonZero(result != expected), 0)
+            << size << " min_size " << min_size << " threads " << threads;
+      }
+      cv::setNumThreads(saved_threads);
     }
   }
 }
