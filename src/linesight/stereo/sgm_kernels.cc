@@ -314,7 +314,11 @@ struct SweepLayout {
   size_t Minima(int path, int parity) const {
     return Slots() + (static_cast<size_t>(path) * 2 + parity) * width;
   }
-  size_t HorizontalMinima() const { return Slots() + 6 * static_cast<size_t>(width); }
+  // Rounded up to whole vectors, so that the pixel's costs and the zero slot are vector-aligned.
+  size_t HorizontalMinima() const {
+    return Slots() +
+           (6 * static_cast<size_t>(width) + kSgmLaneAlign - 1) / kSgmLaneAlign * kSgmLaneAlign;
+  }
   size_t Cost() const { return HorizontalMinima() + kSgmLaneAlign; }
   size_t ZeroSlot() const { return Cost() + padded + kSgmLaneAlign; }
   size_t Total() const { return ZeroSlot() + padded + kSgmLaneAlign; }
@@ -427,6 +431,41 @@ HWY_INLINE void EvenOddToNatural(DW dw, VW even, VW odd, VW* lo, VW* hi) {
 }
 #endif
 
+// The horizontal path reads the L its previous pixel stored a few cycles earlier. Unaligned loads
+// at k - 1 and k + 1 span two of those stores, which the CPU cannot forward: each waits until the
+// stores have left the store buffer, on the path's critical chain. On x86 the horizontal path
+// therefore loads whole vectors at the offsets they were stored at and builds the k - 1 / k + 1
+// neighbours from them in registers (same lanes as the unaligned loads, so identical results).
+#undef LINESIGHT_SGM_NEIGHBOUR_SHUFFLE
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_SSE4
+#define LINESIGHT_SGM_NEIGHBOUR_SHUFFLE 1
+#else
+#define LINESIGHT_SGM_NEIGHBOUR_SHUFFLE 0
+#endif
+#if LINESIGHT_SGM_NEIGHBOUR_SHUFFLE
+// below[j] = lane j - 1 of (lower, same) (lane -1 = top lane of lower); above[j] = lane j + 1 of
+// (same, upper).
+template <typename T, class V>
+HWY_INLINE void NeighbourLanes(V lower, V same, V upper, V* below, V* above) {
+  constexpr int kBytes = sizeof(T);
+#if HWY_TARGET <= HWY_AVX3
+  // 128-bit blocks shifted by one across the vector, then bytes within the blocks.
+  const __m512i lower_blocks = _mm512_alignr_epi64(same.raw, lower.raw, 6);
+  const __m512i upper_blocks = _mm512_alignr_epi64(upper.raw, same.raw, 2);
+  *below = V{_mm512_alignr_epi8(same.raw, lower_blocks, 16 - kBytes)};
+  *above = V{_mm512_alignr_epi8(upper_blocks, same.raw, kBytes)};
+#elif HWY_TARGET == HWY_AVX2
+  const __m256i lower_blocks = _mm256_permute2x128_si256(lower.raw, same.raw, 0x21);
+  const __m256i upper_blocks = _mm256_permute2x128_si256(same.raw, upper.raw, 0x21);
+  *below = V{_mm256_alignr_epi8(same.raw, lower_blocks, 16 - kBytes)};
+  *above = V{_mm256_alignr_epi8(upper_blocks, same.raw, kBytes)};
+#else
+  *below = V{_mm_alignr_epi8(same.raw, lower.raw, 16 - kBytes)};
+  *above = V{_mm_alignr_epi8(upper.raw, same.raw, kBytes)};
+#endif
+}
+#endif
+
 // With uint8 path costs a sum of at most four of them is below 1024 (10 bits) and a census cost of
 // at most 63 fits the 6 bits above it: the first sweep stores the pixel's costs there, and the
 // second reads them back instead of recomputing the Hamming distances (UsesPackedCosts).
@@ -486,8 +525,17 @@ HWY_INLINE void AggregatePixel(const T* HWY_RESTRICT cost, const PathStep<T>* st
     VW acc0 = hn::Zero(dw), acc1 = hn::Zero(dw);
     for (int p = 0; p < kPaths; ++p) {
       const V same = hn::LoadU(d, prev[p] + k);
-      const V below = hn::LoadU(d, prev[p] + k - 1);
-      const V above = hn::LoadU(d, prev[p] + k + 1);
+      V below, above;
+#if LINESIGHT_SGM_NEIGHBOUR_SHUFFLE
+      if (p == 0) {  // the horizontal path (see NeighbourLanes)
+        NeighbourLanes<T>(hn::LoadU(d, prev[p] + k - n), same, hn::LoadU(d, prev[p] + k + n),
+                          &below, &above);
+      } else
+#endif
+      {
+        below = hn::LoadU(d, prev[p] + k - 1);
+        above = hn::LoadU(d, prev[p] + k + 1);
+      }
       V best = hn::Min(same, hn::SaturatedAdd(hn::Min(below, above), p1v));
       best = hn::Min(best, jump[p]);
       V l = hn::Add(c, hn::Sub(best, prev_min[p]));
