@@ -4,9 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <thread>
+#include <type_traits>
 #include <vector>
-
-#include <opencv2/calib3d.hpp>
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
@@ -142,7 +141,7 @@ struct SgmMatcher::Scratch {
   detail::SumVolume sum;
   detail::SweepScratch forward, backward;
   cv::Mat best, right_best;  // per pixel, from the WTA
-  cv::Mat fixed, filtered, smoothed, speckle_buffer;
+  cv::Mat fixed, filtered, smoothed;
   SgmResult result;  // Compute()'s intermediate maps, reused between frames
 };
 
@@ -158,7 +157,7 @@ cv::Mat SgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
   // 752x480); the returned disparity is a fresh buffer every time.
   SgmResult& reused = scratch_->result;
   reused.disparity = cv::Mat();
-  ComputeDetailed(left, right, &reused);
+  Run(left, right, /*detailed=*/false, &reused);
   return reused.disparity;
 }
 
@@ -175,9 +174,13 @@ SgmResult SgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right)
   return result;
 }
 
-void SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right_input,
-                                 SgmResult* result_out) {
-  LS_CHECK(result_out != nullptr);
+void SgmMatcher::ComputeDetailed(const cv::Mat& left, const cv::Mat& right, SgmResult* result) {
+  LS_CHECK(result != nullptr);
+  Run(left, right, /*detailed=*/true, result);
+}
+
+void SgmMatcher::Run(const cv::Mat& left_input, const cv::Mat& right_input, bool detailed,
+                     SgmResult* result_out) {
   if (left_input.empty() || right_input.empty()) throw InputError("sgm: input image is empty");
   if (left_input.size() != right_input.size()) {
     throw InputError(fmt::format("sgm: left image is {}x{} but right image is {}x{}",
@@ -224,49 +227,49 @@ void SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right
   input.p2_gradient_alpha = o.p2_gradient_alpha;
 
   SgmResult& result = *result_out;
-  result.raw_disparity.create(h, w, CV_32FC1);
-  result.right_disparity.create(h, w, CV_32FC1);
-  result.invalid_reason.create(h, w, CV_8UC1);
-  result.min_cost.create(h, w, CV_16UC1);
+  if (detailed) {
+    result.raw_disparity.create(h, w, CV_32FC1);
+    result.right_disparity.create(h, w, CV_32FC1);
+    result.invalid_reason.create(h, w, CV_8UC1);
+    result.min_cost.create(h, w, CV_16UC1);
+    result.second_cost.create(h, w, CV_16UC1);
+  } else {
+    result.raw_disparity.release();
+    result.right_disparity.release();
+    result.invalid_reason.release();
+    result.min_cost.release();
+    result.second_cost.release();
+  }
   s.best.create(h, w, CV_16SC1);
-  result.second_cost.create(h, w, CV_16UC1);
   s.right_best.create(h, w, CV_16SC1);
   s.fixed.create(h, w, CV_16SC1);
 
   const int subpixel = static_cast<int>(o.subpixel);
-  auto finish_row = [&](int y, const uint16_t* sum_row) {
-    // One scratch per thread (the two sweeps finish rows concurrently), reused between rows.
-    thread_local std::vector<uint16_t> right_scratch;
-    right_scratch.resize(detail::WtaScratchSize(w, num));
-    detail::WtaRow row;
-    row.best = s.best.ptr<int16_t>(y);
-    row.best_cost = result.min_cost.ptr<uint16_t>(y);
-    row.second_cost = result.second_cost.ptr<uint16_t>(y);
-    row.right_best = s.right_best.ptr<int16_t>(y);
-    detail::WinnerTakesAllRow(sum_row, w, num, dmin, row, right_scratch.data());
-    float* raw = result.raw_disparity.ptr<float>(y);
-    float* right_out = result.right_disparity.ptr<float>(y);
-    uint8_t* reason = result.invalid_reason.ptr<uint8_t>(y);
+  // The per-pixel decisions of one row; kDetailed also writes the maps of SgmResult.
+  auto finish_pixels = [&](auto detailed_tag, int y, const uint16_t* sum_row,
+                           const detail::WtaRow& row) {
+    constexpr bool kDetailed = decltype(detailed_tag)::value;
+    float* raw = kDetailed ? result.raw_disparity.ptr<float>(y) : nullptr;
+    float* right_out = kDetailed ? result.right_disparity.ptr<float>(y) : nullptr;
+    uint8_t* reason = kDetailed ? result.invalid_reason.ptr<uint8_t>(y) : nullptr;
     int16_t* fixed = s.fixed.ptr<int16_t>(y);
     for (int x = 0; x < w; ++x) {
-      right_out[x] =
-          row.right_best[x] < 0 ? kInvalidDisparity : static_cast<float>(dmin + row.right_best[x]);
+      if constexpr (kDetailed) {
+        right_out[x] = row.right_best[x] < 0 ? kInvalidDisparity
+                                             : static_cast<float>(dmin + row.right_best[x]);
+      }
       // No disparity of the range maps into the right image: x - dmin - k in [0, w) has no solution
       // k.
       if (x - dmin < 0 || x - dmin - (num - 1) >= w) {
-        raw[x] = kInvalidDisparity;
-        reason[x] = static_cast<uint8_t>(SgmInvalid::kNoCandidate);
+        if constexpr (kDetailed) {
+          raw[x] = kInvalidDisparity;
+          reason[x] = static_cast<uint8_t>(SgmInvalid::kNoCandidate);
+        }
         fixed[x] = detail::kSgmInvalidFixed;
         continue;
       }
       const int best = row.best[x];
       const int best_cost = row.best_cost[x], second = row.second_cost[x];
-      const uint16_t* costs = sum_row + static_cast<size_t>(x) * s.sum.padded;
-      int offset = 0;
-      if (best > 0 && best < num - 1)
-        offset = detail::SubpixelOffset(subpixel, costs[best - 1], best_cost, costs[best + 1]);
-      const int value = (dmin + best) * kSgmSubpixelScale + offset;
-      raw[x] = static_cast<float>(value) / kSgmSubpixelScale;
       SgmInvalid why = SgmInvalid::kValid;
       if (static_cast<int64_t>(second) * (100 - o.uniqueness_ratio) <
           static_cast<int64_t>(best_cost) * 100) {
@@ -275,19 +278,54 @@ void SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right
                  !detail::LeftRightConsistent(x, best, row.right_best, w, dmin, o.lr_max_diff)) {
         why = SgmInvalid::kLeftRight;
       }
-      reason[x] = static_cast<uint8_t>(why);
+      if (!kDetailed && why != SgmInvalid::kValid) {
+        fixed[x] = detail::kSgmInvalidFixed;
+        continue;
+      }
+      const uint16_t* costs = sum_row + static_cast<size_t>(x) * s.sum.padded;
+      int offset = 0;
+      if (best > 0 && best < num - 1)
+        offset = detail::SubpixelOffset(subpixel, costs[best - 1], best_cost, costs[best + 1]);
+      const int value = (dmin + best) * kSgmSubpixelScale + offset;
+      if constexpr (kDetailed) {
+        raw[x] = static_cast<float>(value) / kSgmSubpixelScale;
+        reason[x] = static_cast<uint8_t>(why);
+      }
       fixed[x] = why == SgmInvalid::kValid ? static_cast<int16_t>(value) : detail::kSgmInvalidFixed;
+    }
+  };
+  auto finish_row = [&](int y, const uint16_t* sum_row) {
+    // One scratch per thread (the two sweeps finish rows concurrently), reused between rows.
+    thread_local std::vector<uint16_t> right_scratch, row_costs;
+    right_scratch.resize(detail::WtaScratchSize(w, num));
+    detail::WtaRow row;
+    row.best = s.best.ptr<int16_t>(y);
+    row.right_best = s.right_best.ptr<int16_t>(y);
+    if (detailed) {
+      row.best_cost = result.min_cost.ptr<uint16_t>(y);
+      row.second_cost = result.second_cost.ptr<uint16_t>(y);
+    } else {
+      row_costs.resize(2 * static_cast<size_t>(w));
+      row.best_cost = row_costs.data();
+      row.second_cost = row_costs.data() + w;
+    }
+    detail::WinnerTakesAllRow(sum_row, w, num, dmin, row, right_scratch.data());
+    if (detailed) {
+      finish_pixels(std::true_type(), y, sum_row, row);
+    } else {
+      finish_pixels(std::false_type(), y, sum_row, row);
     }
   };
   detail::AggregatePaths(input, std::min(threads, 2), &s.sum, &s.forward, &s.backward, finish_row);
 
-  // Stage 5: speckle filter on the fixed-point map (OpenCV's, serial).
+  // Stage 5: speckle filter on the fixed-point map (cv::filterSpeckles' result, over row stripes in
+  // parallel).
   const cv::Mat* map = &s.fixed;
   if (o.speckle_window > 0) {
     s.fixed.copyTo(s.filtered);  // reuses the buffer
-    cv::filterSpeckles(s.filtered, detail::kSgmInvalidFixed, o.speckle_window,
-                       static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)),
-                       s.speckle_buffer);
+    detail::FilterSpeckles(&s.filtered, o.speckle_window,
+                           static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)),
+                           threads);
     map = &s.filtered;
   }
   // Stage 6 and output, rows in parallel: speckle reasons, 3×3 median over valid neighbours, float
@@ -295,7 +333,7 @@ void SgmMatcher::ComputeDetailed(const cv::Mat& left_input, const cv::Mat& right
   if (o.median) s.smoothed.create(h, w, CV_16SC1);
   result.disparity.create(h, w, CV_32FC1);
   detail::ParallelRanges(h, threads, [&](int begin, int end) {
-    if (o.speckle_window > 0) {
+    if (detailed && o.speckle_window > 0) {
       for (int y = begin; y < end; ++y) {
         const int16_t* before = s.fixed.ptr<int16_t>(y);
         const int16_t* after = s.filtered.ptr<int16_t>(y);

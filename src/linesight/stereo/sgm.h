@@ -126,6 +126,10 @@ class SgmMatcher final : public StereoMatcher {
   const SgmOptions& options() const { return options_; }
 
  private:
+  // `detailed` = false (Compute) leaves out the maps only SgmResult's readers need (raw and right
+  // disparities, invalid reasons, costs): the disparity is the same.
+  void Run(const cv::Mat& left, const cv::Mat& right, bool detailed, SgmResult* result);
+
   struct Scratch;
   SgmOptions options_;
   std::unique_ptr<Scratch> scratch_;

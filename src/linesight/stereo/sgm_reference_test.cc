@@ -558,6 +558,40 @@ TEST_P(SgmKernelTest, MedianOfValidNeighboursEqualsReference) {
   }
 }
 
+TEST(SgmScalarStages, SpeckleFilterEqualsOpenCvForAnyThreadCount) {
+  cv::RNG rng(23);
+  const std::vector<std::pair<int, int>> sizes = {{311, 239}, {33, 7}, {1, 1}, {1, 9},
+                                                  {70, 1},    {2, 2},  {65, 3}};
+  for (const auto& [w, h] : sizes) {
+    for (const double invalid_fraction : {0.0, 0.1, 0.5, 1.0}) {
+      // Piecewise smooth values (blocks plus noise) so that pieces of every size, shape and
+      // nesting occur, with invalid pixels scattered over them.
+      cv::Mat blocks((h + 4) / 5, (w + 4) / 5, CV_16SC1), src;
+      rng.fill(blocks, cv::RNG::UNIFORM, -40, 40);
+      cv::resize(blocks, src, cv::Size(w, h), 0, 0, cv::INTER_NEAREST);
+      for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+          int16_t& v = src.at<int16_t>(y, x);
+          v = static_cast<int16_t>(v * 16 + rng.uniform(-12, 13));
+          if (rng.uniform(0.0, 1.0) < invalid_fraction) v = kSgmInvalidFixed;
+        }
+      }
+      for (const auto& [max_size, max_diff] :
+           std::vector<std::pair<int, int>>{{0, 16}, {1, 0}, {20, 8}, {100, 32}, {5000, 16}}) {
+        cv::Mat want = src.clone();
+        cv::filterSpeckles(want, kSgmInvalidFixed, max_size, max_diff);
+        for (const int threads : {1, 2, 3, 7}) {
+          cv::Mat got = src.clone();
+          detail::FilterSpeckles(&got, max_size, max_diff, threads);
+          ASSERT_EQ(cv::norm(got != want, cv::NORM_L1), 0)
+              << w << "x" << h << " invalid " << invalid_fraction << " size " << max_size
+              << " diff " << max_diff << " threads " << threads;
+        }
+      }
+    }
+  }
+}
+
 TEST(SgmScalarStages, MedianOfValidNeighbours) {
   cv::Mat src(3, 3, CV_16SC1, cv::Scalar(kSgmInvalidFixed));
   src.at<int16_t>(0, 0) = 10;

@@ -189,6 +189,12 @@ bool LeftRightConsistent(int x, int best, const int16_t* right_best, int width, 
 // invalid); the lower median when the count is even. Rows [row_begin, row_end) of dst.
 void MedianValid3x3(const cv::Mat& src, cv::Mat& dst, int row_begin, int row_end);
 
+// Speckle filter: every 4-connected piece of pixels != kSgmInvalidFixed whose neighbours differ by
+// at most max_diff and that has at most max_speckle_size pixels becomes kSgmInvalidFixed — the
+// result of cv::filterSpeckles(*map, kSgmInvalidFixed, max_speckle_size, max_diff), computed over
+// `threads` row stripes (identical for any thread count). CV_16SC1.
+void FilterSpeckles(cv::Mat* map, int max_speckle_size, int max_diff, int threads);
+
 // Name of the Highway target the kernels dispatch to.
 std::string DispatchedTargetName();
 

@@ -226,6 +226,27 @@ TEST(SgmAccuracy, SlantedPlaneWithKnownDisparity) {
   }
 }
 
+TEST(SgmMatcher, ComputeEqualsComputeDetailedWhateverTheOrder) {
+  // Compute leaves out the maps only SgmResult needs; the disparity must not change, and the
+  // buffers they share between frames must not leak from one call into the other.
+  const SyntheticPair pair = MakeSlantedPlane(157, 93, 6.0, 0.04, 0.01, 7);
+  const SyntheticPair other = MakeSlantedPlane(157, 93, 11.0, -0.03, 0.02, 8);
+  for (const int min_disparity : {0, -3}) {
+    SgmOptions o;
+    o.min_disparity = min_disparity;
+    o.num_disparities = 37;
+    SgmMatcher matcher(o);
+    SgmMatcher fresh(o);
+    const cv::Mat lean = matcher.Compute(pair.left, pair.right).clone();
+    const SgmResult detailed = matcher.ComputeDetailed(pair.left, pair.right);
+    const cv::Mat lean_other = matcher.Compute(other.left, other.right).clone();
+    const cv::Mat fresh_other = fresh.ComputeDetailed(other.left, other.right).disparity;
+    EXPECT_EQ(cv::norm(lean != detailed.disparity, cv::NORM_L1), 0) << min_disparity;
+    EXPECT_EQ(cv::norm(lean_other != fresh_other, cv::NORM_L1), 0) << min_disparity;
+    EXPECT_GT(cv::countNonZero(lean < kInvalidDisparity), 0.8 * lean.total());  // mostly valid
+  }
+}
+
 TEST(SgmConfidence, FromWinnerAndSecondCosts) {
   SgmResult r;
   r.min_cost = (cv::Mat_<uint16_t>(1, 5) << 10, 0, 30, 7, 5);
