@@ -37,42 +37,19 @@
 namespace linesight::cli {
 namespace {
 
-struct CellStats {
+struct CellStats : RangeRunStats {
   std::string calibration, type;
   double truth_m = 0.0;
-  int runs = 0, measured = 0, covered = 0;
-  double mean_m = 0.0, std_m = 0.0, mean_sigma_m = 0.0, mean_abs_relative = 0.0;
-  std::map<std::string, int> failures;  // reason of each run without a measurement -> count
   double relative_error() const { return (mean_m - truth_m) / truth_m; }
 };
 
 CellStats Summarise(const std::string& calibration, const std::string& type, double truth,
                     const std::vector<RangeResult>& results, const std::vector<double>& truths) {
   CellStats s;
+  static_cast<RangeRunStats&>(s) = SummariseRangeRuns(results, truths);
   s.calibration = calibration;
   s.type = type;
   s.truth_m = truth;
-  s.runs = int(results.size());
-  std::vector<double> d;
-  for (size_t i = 0; i < results.size(); ++i) {
-    const RangeResult& r = results[i];
-    if (!r.ok()) {
-      ++s.failures[r.reason];
-      continue;
-    }
-    d.push_back(r.distance_m);
-    s.mean_sigma_m += r.sigma_m;
-    s.mean_abs_relative += std::abs(r.distance_m - truths[i]) / truths[i];
-    s.covered += std::abs(r.distance_m - truths[i]) <= 2.0 * r.sigma_m;
-  }
-  s.measured = int(d.size());
-  if (d.empty()) return s;
-  s.mean_m = std::accumulate(d.begin(), d.end(), 0.0) / double(d.size());
-  double ss = 0.0;
-  for (double v : d) ss += (v - s.mean_m) * (v - s.mean_m);
-  s.std_m = d.size() > 1 ? std::sqrt(ss / double(d.size() - 1)) : 0.0;
-  s.mean_sigma_m /= double(d.size());
-  s.mean_abs_relative /= double(d.size());
   return s;
 }
 
@@ -500,11 +477,7 @@ int RunEvalRanging(int argc, char** argv) {
           const sim::PowerLineScene scene = renderer.Capture(std::uint64_t(run) * 7919 + 17);
           const sim::RenderedObstacle& obstacle = scene.obstacles.front();
           truths.push_back(obstacle.distance_m);
-          cv::Rect roi = obstacle.box;
-          const int grow_x = int(0.15 * roi.width) + 6, grow_y = int(0.15 * roi.height) + 6;
-          roi = cv::Rect(roi.x - grow_x, roi.y - grow_y, roi.width + 2 * grow_x,
-                         roi.height + 2 * grow_y) &
-                cv::Rect(0, 0, scene.left.cols, scene.left.rows);
+          const cv::Rect roi = GrowRoi(obstacle.box, scene.left.size());
           for (size_t c = 0; c < calibs.size(); ++c) {
             const RangingFrame frame =
                 pipelines[c].Process(scene.left, scene.right, cv::Range(roi.y, roi.br().y));

@@ -380,30 +380,11 @@ namespace {
 PlateCell Summarise(const std::string& shape, const std::string& texture, double truth,
                     const std::vector<RangeResult>& results) {
   PlateCell c;
+  static_cast<RangeRunStats&>(c) =
+      SummariseRangeRuns(results, std::vector<double>(results.size(), truth));
   c.shape = shape;
   c.texture = texture;
   c.truth_m = truth;
-  c.runs = static_cast<int>(results.size());
-  std::vector<double> d;
-  for (const RangeResult& r : results) {
-    if (!r.ok()) {
-      ++c.failures[r.reason];
-      continue;
-    }
-    d.push_back(r.distance_m);
-    c.mean_sigma_m += r.sigma_m;
-    c.mean_abs_relative += std::abs(r.distance_m - truth) / truth;
-    c.covered += std::abs(r.distance_m - truth) <= 2.0 * r.sigma_m;
-  }
-  c.measured = static_cast<int>(d.size());
-  if (d.empty()) return c;
-  const double n = static_cast<double>(d.size());
-  c.mean_m = std::accumulate(d.begin(), d.end(), 0.0) / n;
-  double ss = 0.0;
-  for (double v : d) ss += (v - c.mean_m) * (v - c.mean_m);
-  c.std_m = d.size() > 1 ? std::sqrt(ss / (n - 1.0)) : 0.0;
-  c.mean_sigma_m /= n;
-  c.mean_abs_relative /= n;
   return c;
 }
 
@@ -447,12 +428,7 @@ PlateStudyReport RunPlateStudy(const PlateStudyOptions& options, ProgressBar* pr
         spec.centre_px = {0.70 * options.rig.image_size.width,
                           0.45 * options.rig.image_size.height};
         const PlateRendering scene = RenderPlateScene(spec);
-        cv::Rect roi = scene.box;
-        const int grow_x = static_cast<int>(0.15 * roi.width) + 6;
-        const int grow_y = static_cast<int>(0.15 * roi.height) + 6;
-        roi = cv::Rect(roi.x - grow_x, roi.y - grow_y, roi.width + 2 * grow_x,
-                       roi.height + 2 * grow_y) &
-              cv::Rect(cv::Point(0, 0), options.rig.image_size);
+        const cv::Rect roi = GrowRoi(scene.box, options.rig.image_size);
         std::vector<RangeResult> results;
         for (int run = 0; run < options.runs; ++run) {
           const std::uint64_t seed = options.seed * 1000003u + static_cast<std::uint64_t>(run) * 2;

@@ -104,12 +104,9 @@ struct PlateStudyOptions {
   void Check() const;
 };
 
-struct PlateCell {
+struct PlateCell : RangeRunStats {
   std::string shape, texture;
   double truth_m = 0.0;
-  int runs = 0, measured = 0, covered = 0;  // covered: |measured - truth| <= 2 sigma
-  double mean_m = 0.0, std_m = 0.0, mean_sigma_m = 0.0, mean_abs_relative = 0.0;
-  std::map<std::string, int> failures;  // reason -> runs without a measurement
   double relative_error() const { return measured > 0 ? (mean_m - truth_m) / truth_m : 0.0; }
 };
 

@@ -420,4 +420,41 @@ nlohmann::json RangeResultToJson(const RangeResult& result) {
   return j;
 }
 
+cv::Rect GrowRoi(const cv::Rect& box, cv::Size image_size, double fraction, int margin_px) {
+  const int grow_x = static_cast<int>(fraction * box.width) + margin_px;
+  const int grow_y = static_cast<int>(fraction * box.height) + margin_px;
+  return cv::Rect(box.x - grow_x, box.y - grow_y, box.width + 2 * grow_x, box.height + 2 * grow_y) &
+         cv::Rect(cv::Point(0, 0), image_size);
+}
+
+RangeRunStats SummariseRangeRuns(const std::vector<RangeResult>& results,
+                                 const std::vector<double>& truths) {
+  LS_CHECK(results.size() == truths.size());
+  RangeRunStats s;
+  s.runs = static_cast<int>(results.size());
+  std::vector<double> d;
+  for (size_t i = 0; i < results.size(); ++i) {
+    const RangeResult& r = results[i];
+    if (!r.ok()) {
+      ++s.failures[r.reason];
+      continue;
+    }
+    d.push_back(r.distance_m);
+    s.mean_sigma_m += r.sigma_m;
+    s.mean_abs_relative += std::abs(r.distance_m - truths[i]) / truths[i];
+    s.covered += std::abs(r.distance_m - truths[i]) <= 2.0 * r.sigma_m;
+  }
+  s.measured = static_cast<int>(d.size());
+  if (d.empty()) return s;
+  const double n = static_cast<double>(d.size());
+  for (const double v : d) s.mean_m += v;
+  s.mean_m /= n;
+  double ss = 0.0;
+  for (const double v : d) ss += (v - s.mean_m) * (v - s.mean_m);
+  s.std_m = d.size() > 1 ? std::sqrt(ss / (n - 1.0)) : 0.0;
+  s.mean_sigma_m /= n;
+  s.mean_abs_relative /= n;
+  return s;
+}
+
 }  // namespace linesight

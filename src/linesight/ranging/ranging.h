@@ -13,6 +13,7 @@
 // -> local median smoothing -> near percentile -> sigma from the residuals.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -130,6 +131,20 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoCalibration& cal
 void CheckRoi(const cv::Rect& roi, cv::Size image_size);
 // "x,y,w,h" -> cv::Rect; throws UsageError naming the text.
 cv::Rect ParseRoi(const std::string& text);
+// The ROI the accuracy studies range: `box` grown by `fraction` of its size plus `margin_px` on
+// every side, clipped to the image.
+cv::Rect GrowRoi(const cv::Rect& box, cv::Size image_size, double fraction = 0.15,
+                 int margin_px = 6);
+
+// Statistics of repeated measurements of one obstacle (the accuracy studies' cells): results[i]
+// measured an obstacle at true distance truths[i].
+struct RangeRunStats {
+  int runs = 0, measured = 0, covered = 0;  // covered: |measured - truth| <= 2 sigma
+  double mean_m = 0.0, std_m = 0.0, mean_sigma_m = 0.0, mean_abs_relative = 0.0;
+  std::map<std::string, int> failures;  // reason -> runs without a measurement
+};
+RangeRunStats SummariseRangeRuns(const std::vector<RangeResult>& results,
+                                 const std::vector<double>& truths);
 
 nlohmann::json RangeResultToJson(const RangeResult& result);
 

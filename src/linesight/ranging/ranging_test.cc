@@ -1,5 +1,7 @@
 #include "linesight/ranging/ranging.h"
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
@@ -51,6 +53,43 @@ TEST(ParseRoiTest, ParsesAndRejects) {
   EXPECT_THROW(ParseRoi("10,20,30"), UsageError);
   EXPECT_THROW(ParseRoi("10,20,30,40,5"), UsageError);
   EXPECT_THROW(ParseRoi("a,b,c,d"), UsageError);
+}
+
+TEST(GrowRoiTest, GrowsByFractionAndMarginAndClips) {
+  // 100x40 box: +15 + 6 = 21 px left/right, +6 + 6 = 12 px top/bottom.
+  EXPECT_EQ(GrowRoi(cv::Rect(200, 100, 100, 40), cv::Size(752, 480)), cv::Rect(179, 88, 142, 64));
+  // 20x10 box: 3 + 6 = 9 px left/right, 1 + 6 = 7 px top/bottom, clipped at the image border.
+  EXPECT_EQ(GrowRoi(cv::Rect(5, 470, 20, 10), cv::Size(752, 480)), cv::Rect(0, 463, 34, 17));
+  EXPECT_EQ(GrowRoi(cv::Rect(10, 10, 10, 10), cv::Size(752, 480), 0.0, 0),
+            cv::Rect(10, 10, 10, 10));
+}
+
+TEST(SummariseRangeRunsTest, MeanSpreadCoverageAndFailures) {
+  std::vector<RangeResult> results(4);
+  const std::vector<double> truths = {2.0, 2.0, 4.0, 4.0};
+  results[0].status = results[1].status = results[2].status = RangeStatus::kOk;
+  results[0].distance_m = 2.1, results[0].sigma_m = 0.1;  // within 2 sigma
+  results[1].distance_m = 1.7, results[1].sigma_m = 0.1;  // outside
+  results[2].distance_m = 4.2, results[2].sigma_m = 0.1;  // at exactly 2 sigma
+  results[3].reason = "too few valid disparities";
+  const RangeRunStats s = SummariseRangeRuns(results, truths);
+  EXPECT_EQ(s.runs, 4);
+  EXPECT_EQ(s.measured, 3);
+  EXPECT_EQ(s.covered, 1 + 0 + (std::abs(4.2 - 4.0) <= 2.0 * 0.1));
+  EXPECT_NEAR(s.mean_m, (2.1 + 1.7 + 4.2) / 3, 1e-12);
+  const double m = (2.1 + 1.7 + 4.2) / 3;
+  EXPECT_NEAR(
+      s.std_m,
+      std::sqrt(((2.1 - m) * (2.1 - m) + (1.7 - m) * (1.7 - m) + (4.2 - m) * (4.2 - m)) / 2),
+      1e-12);
+  EXPECT_NEAR(s.mean_sigma_m, 0.1, 1e-12);
+  EXPECT_NEAR(s.mean_abs_relative, (0.05 + 0.15 + 0.05) / 3, 1e-12);
+  ASSERT_EQ(s.failures.size(), 1u);
+  EXPECT_EQ(s.failures.at("too few valid disparities"), 1);
+  // No measurement at all: zeros, the failures counted.
+  const RangeRunStats none = SummariseRangeRuns({results[3]}, {1.0});
+  EXPECT_EQ(none.measured, 0);
+  EXPECT_EQ(none.mean_m, 0.0);
 }
 
 TEST(RangingTest, RejectsBadRoiAndBadDisparity) {
