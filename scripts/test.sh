@@ -11,7 +11,9 @@ bash scripts/install-deps.sh
 
 # ccache makes repeated builds (a second clone, the ASan build of unchanged code) cheap; BASEDIR makes its
 # hits independent of where the clone lives.
-export CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=1
+# A fresh clone's headers are all "too new" for ccache's direct mode (it would preprocess every file
+# to find its hit): mtime/ctime sloppiness lets the manifests hit directly.
+export CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=1 CCACHE_SLOPPINESS=include_file_mtime,include_file_ctime
 LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 
 if [ "${CI:-}" = "true" ]; then
@@ -36,5 +38,8 @@ if [ "${CI:-}" = "true" ]; then
   echo "== tests under ASan+UBSan"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j"$JOBS" --timeout 900 -LE slow \
-      -E '^ReconViewNoiseModel\.'  # two full recon calibrations: 100 s under ASan, run in the release suite
+      -E '^ReconViewNoiseModel\.|^CalibrateStereo\.NoisyEstimateIsConsistentWithTheCramerRaoBound$|^PlateStudyTest\.PhotographTexturedPlateAndBoxAreRangedWithinOnePercent$'
+  # Left out under ASan (run in the release suite above): accuracy studies that repeat code the
+  # smaller tests already run under ASan — two full recon calibrations (100 s), 20 noisy stereo
+  # calibrations (46 s), the plate study over 6 cells (35 s).
 fi
