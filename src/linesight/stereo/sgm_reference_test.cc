@@ -361,6 +361,21 @@ std::vector<Config> Configs() {
   wide.num_disparities = 300;
   wide.paths = 4;
   configs.push_back(wide);
+  // Whole vectors per pixel with 8 paths and packed census costs: the unrolled sweeps of 2 and 4
+  // vectors (128 disparities on AVX-512 and AVX2, 256 on AVX-512; 64 on AVX2 / SSE4 above).
+  Config whole = small;
+  whole.width = 83;
+  whole.height = 11;
+  whole.min_disparity = 3;
+  whole.num_disparities = 128;
+  whole.threads = 2;
+  configs.push_back(whole);
+  whole.width = 301;
+  whole.min_disparity = -7;
+  whole.num_disparities = 256;
+  whole.census_width = 9;
+  whole.census_height = 7;
+  configs.push_back(whole);
   return configs;
 }
 
