@@ -265,11 +265,14 @@ BenchReport RunThroughputBench(const BenchOptions& options,
     for (BenchRow& row : rows) {
       if (base == rows.end() || row.skipped) continue;
       row.ratio_to_3way = base->median_ms / row.median_ms;  // MDE/s ratio at equal W·H·D
+      std::vector<double> ratios;
       for (size_t r = 0; r < row.round_median_ms.size() && r < base->round_median_ms.size(); ++r) {
         const double ratio = base->round_median_ms[r] / row.round_median_ms[r];
         row.ratio_low = r == 0 ? ratio : std::min(row.ratio_low, ratio);
         row.ratio_high = r == 0 ? ratio : std::max(row.ratio_high, ratio);
+        ratios.push_back(ratio);
       }
+      if (!ratios.empty()) row.ratio_paired = Median(ratios);
     }
     for (const BenchRow& row : rows) {
       report.rows.push_back(row);
@@ -288,28 +291,31 @@ std::string BenchMarkdown(const BenchReport& r) {
   out << fmt::format(
       "input: {}; median of {} rounds x {} runs (methods interleaved round by round, each run "
       "after {} warm-up run(s) discarded); vs SGBM_3WAY: ratio of the medians (range over the "
-      "rounds); peak = largest VmHWM of a forked child per round\n\n",
+      "rounds); paired: median over the rounds of each round's ratio; peak = largest VmHWM of a "
+      "forked child per round\n\n",
       r.input, r.rounds, r.runs, r.warmup);
   out << "| method | size | disparities | ms | fps | MDE/s | peak RSS (MiB) | added (MiB) | "
-         "density % | vs "
-         "SGBM_3WAY |\n";
-  out << "|---|---|---|---|---|---|---|---|---|---|\n";
+         "density % | vs SGBM_3WAY | paired |\n";
+  out << "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const BenchRow& row : r.rows) {
     const std::string size = fmt::format("{}x{}", row.size.width, row.size.height);
     if (row.skipped) {
-      out << fmt::format("| {} | {} | {} | skipped: {} | | | | | | |\n", row.method, size,
+      out << fmt::format("| {} | {} | {} | skipped: {} | | | | | | | |\n", row.method, size,
                          row.size.num_disparities, row.note);
       continue;
     }
     out << fmt::format(
-        "| {} | {} | {} | {:.1f} | {:.1f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} | {} |\n", row.method,
-        size, row.size.num_disparities, row.median_ms, row.fps, row.mde_per_s, row.peak_rss_mb,
-        row.peak_added_mb, row.density,
+        "| {} | {} | {} | {:.1f} | {:.1f} | {:.0f} | {:.0f} | {:.0f} | {:.1f} | {} | {} |\n",
+        row.method, size, row.size.num_disparities, row.median_ms, row.fps, row.mde_per_s,
+        row.peak_rss_mb, row.peak_added_mb, row.density,
         row.ratio_to_3way > 0 ? (row.method == "sgbm-3way" || r.rounds < 2
                                      ? fmt::format("{:.2f}x", row.ratio_to_3way)
                                      : fmt::format("{:.2f}x ({:.2f}-{:.2f})", row.ratio_to_3way,
                                                    row.ratio_low, row.ratio_high))
-                              : "-");
+                              : "-",
+        row.ratio_paired > 0 && row.method != "sgbm-3way" && r.rounds >= 2
+            ? fmt::format("{:.2f}x", row.ratio_paired)
+            : "-");
   }
   return out.str();
 }
@@ -335,6 +341,7 @@ nlohmann::json BenchJson(const BenchReport& r) {
                 {"ratio_to_sgbm_3way", row.ratio_to_3way},
                 {"ratio_to_sgbm_3way_low", row.ratio_low},
                 {"ratio_to_sgbm_3way_high", row.ratio_high},
+                {"ratio_to_sgbm_3way_paired", row.ratio_paired},
                 {"round_median_ms", row.round_median_ms}});
     }
     rows.push_back(j);

@@ -57,7 +57,10 @@ struct BenchRow {
   double density = 0;        // % of pixels with an estimate in the last run
   double ratio_to_3way = 0;  // MDE/s relative to sgbm-3way at the same size (0 if not measured)
   double ratio_low = 0, ratio_high = 0;  // smallest and largest per-round ratio
-  std::vector<double> round_median_ms;   // median of each round's runs
+  // Median over the rounds of the ratio within each round (the methods of a round run back to
+  // back): less sensitive than ratio_to_3way to the machine's speed drifting between rounds.
+  double ratio_paired = 0;
+  std::vector<double> round_median_ms;  // median of each round's runs
 };
 
 struct BenchReport {

@@ -1,5 +1,8 @@
 #include "linesight/stereo/throughput_bench.h"
 
+#include <algorithm>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
@@ -37,6 +40,12 @@ TEST(ThroughputBench, InterleavedRoundsPoolTheirRuns) {
   EXPECT_DOUBLE_EQ(sgm.ratio_to_3way, base.median_ms / sgm.median_ms);
   EXPECT_LE(sgm.ratio_low, sgm.ratio_high);
   EXPECT_GT(sgm.ratio_low, 0);
+  // Paired: the median of the three per-round ratios, i.e. one of them.
+  std::vector<double> ratios;
+  for (int r = 0; r < 3; ++r) ratios.push_back(base.round_median_ms[r] / sgm.round_median_ms[r]);
+  std::sort(ratios.begin(), ratios.end());
+  EXPECT_DOUBLE_EQ(sgm.ratio_paired, ratios[1]);
+  EXPECT_DOUBLE_EQ(base.ratio_paired, 1.0);
   EXPECT_TRUE(report.rows[2].skipped);
   EXPECT_NE(report.rows[2].note.find("not registered"), std::string::npos);
   const std::string table = BenchMarkdown(report);
