@@ -17,25 +17,25 @@ export CCACHE_BASEDIR="$ROOT" CCACHE_NOHASHDIR=1 CCACHE_SLOPPINESS=include_file_
 LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 
 if [ "${CI:-}" = "true" ]; then
-  echo "== format check (clang-format, then git diff --exit-code)"
+  echo "== format check (clang-format, then git diff --exit-code) [$(date -u +%T)]"
   git ls-files '*.cc' '*.h' | xargs clang-format -i
   git diff --exit-code --stat || { echo "format check failed: run clang-format -i on the files above"; exit 1; }
 fi
 
-echo "== release build (warnings as errors)"
+echo "== release build (warnings as errors) [$(date -u +%T)]"
 cmake -S . -B build -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=Release -DLINESIGHT_WERROR=ON \
   -DLINESIGHT_STRICT=ON >/dev/null
 cmake --build build -j"$JOBS"
 
-echo "== tests"
+echo "== tests [$(date -u +%T)]"
 ctest --test-dir build --output-on-failure -j"$JOBS" --timeout 600
 
 if [ "${CI:-}" = "true" ]; then
-  echo "== ASan+UBSan build of the tests"
+  echo "== ASan+UBSan build of the tests [$(date -u +%T)]"
   cmake -S . -B build-asan -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
     -DLINESIGHT_WERROR=ON -DLINESIGHT_STRICT=ON -DLINESIGHT_SANITIZE=ON -DLINESIGHT_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build build-asan -j"$JOBS"
-  echo "== tests under ASan+UBSan"
+  echo "== tests under ASan+UBSan [$(date -u +%T)]"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j"$JOBS" --timeout 900 -LE slow \
       -E '^ReconViewNoiseModel\.|^CalibrateStereo\.NoisyEstimateIsConsistentWithTheCramerRaoBound$|^PlateStudyTest\.PhotographTexturedPlateAndBoxAreRangedWithinOnePercent$'
@@ -43,3 +43,4 @@ if [ "${CI:-}" = "true" ]; then
   # smaller tests already run under ASan — two full recon calibrations (100 s), 20 noisy stereo
   # calibrations (46 s), the plate study over 6 cells (35 s).
 fi
+echo "== done [$(date -u +%T)]"
