@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/stereo/run_forest.h"
 
 namespace linesight {
 
@@ -132,100 +134,29 @@ int EnforceConnectivity(cv::Mat* labels, int min_size) {
   LS_CHECK(labels->type() == CV_32SC1 && labels->isContinuous());
   const int width = labels->cols, height = labels->rows;
   int32_t* label = labels->ptr<int32_t>();
-  // Horizontal runs of equal labels, in raster order; runs of the same label that touch vertically
-  // are united (union-find whose root is the smallest run index, i.e. the piece's first run, whose
-  // first pixel is the piece's first pixel in raster order). Linking the larger root under the
-  // smaller makes every root the smallest index of its piece whatever the order of the unions, so
-  // row stripes are united in parallel and then joined across the stripe borders.
-  struct Run {
-    int32_t x0, x1, label, parent;  // columns [x0, x1) of its row
-  };
-  const int stripes = std::max(1, std::min(height, 4 * cv::getNumThreads()));
-  auto stripe_begin = [&](int stripe) {
-    return static_cast<int>(static_cast<int64_t>(height) * stripe / stripes);
-  };
-  // The runs of each stripe (in raster order), then concatenated; row_begin[y] = first run of row
-  // y (counted within the stripe, then in the concatenation).
-  std::vector<std::vector<Run>> stripe_runs(stripes);
-  std::vector<int32_t> row_begin(height + 1, 0);
-  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
-    for (int stripe = range.start; stripe < range.end; ++stripe) {
-      std::vector<Run>& out = stripe_runs[stripe];
-      out.clear();
-      out.reserve(static_cast<size_t>(stripe_begin(stripe + 1) - stripe_begin(stripe)) * width / 2);
-      for (int y = stripe_begin(stripe); y < stripe_begin(stripe + 1); ++y) {
-        row_begin[y] = static_cast<int32_t>(out.size());
+  // Pieces: horizontal runs of equal labels, united with the touching runs of the same label in
+  // the row above. Each piece's root is its first run, whose first pixel is the piece's first
+  // pixel in raster order.
+  RunForest forest = BuildRunForest(
+      height, 4 * cv::getNumThreads(),
+      [&](int y, std::vector<Run>* out) {
         const int32_t* l = label + static_cast<ptrdiff_t>(y) * width;
         for (int x = 0; x < width;) {
           int end = x + 1;
           while (end < width && l[end] == l[x]) ++end;
-          out.push_back({x, end, l[x], 0});
+          out->push_back({x, end, l[x], 0});
           x = end;
         }
-      }
-    }
-  });
-  std::vector<int32_t> stripe_offset(stripes + 1, 0);
-  for (int stripe = 0; stripe < stripes; ++stripe) {
-    stripe_offset[stripe + 1] =
-        stripe_offset[stripe] + static_cast<int32_t>(stripe_runs[stripe].size());
-  }
-  for (int stripe = 0; stripe < stripes; ++stripe) {
-    for (int y = stripe_begin(stripe); y < stripe_begin(stripe + 1); ++y) {
-      row_begin[y] += stripe_offset[stripe];
-    }
-  }
-  const int count = stripe_offset[stripes];
-  std::vector<Run> runs(count);
-  row_begin[height] = count;
-  auto find = [&](int32_t r) {
-    while (runs[r].parent != r) {
-      runs[r].parent = runs[runs[r].parent].parent;
-      r = runs[r].parent;
-    }
-    return r;
-  };
-  // Unites the runs of row y with the overlapping runs of equal label in row y - 1.
-  auto unite_rows = [&](int y) {
-    int above = row_begin[y - 1];
-    for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
-      const int x0 = runs[r].x0, x1 = runs[r].x1, l = runs[r].label;
-      while (above < row_begin[y] && runs[above].x1 <= x0) ++above;
-      for (int a = above; a < row_begin[y] && runs[a].x0 < x1; ++a) {
-        if (runs[a].label != l) continue;
-        const int32_t ra = find(a), rr = find(r);
-        if (ra < rr) {
-          runs[rr].parent = ra;
-        } else if (rr < ra) {
-          runs[ra].parent = rr;
-        }
-      }
-    }
-  };
-  cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& range) {
-    for (int stripe = range.start; stripe < range.end; ++stripe) {
-      const int offset = stripe_offset[stripe];
-      const std::vector<Run>& local = stripe_runs[stripe];
-      for (size_t i = 0; i < local.size(); ++i) {
-        runs[offset + i] = local[i];
-        runs[offset + i].parent = offset + static_cast<int32_t>(i);
-      }
-      const int y0 = stripe_begin(stripe), y1 = stripe_begin(stripe + 1);
-      // Rows of this stripe only (the union touches runs of this stripe only).
-      for (int y = y0 + 1; y < y1; ++y) unite_rows(y);
-    }
-  });
-  for (int stripe = 1; stripe < stripes; ++stripe) {
-    const int y = stripe_begin(stripe);
-    if (y > 0 && y < height) unite_rows(y);
-  }
-  // Every parent index is at most its run's index, so one pass in index order leaves each run
-  // pointing at its root. Then piece sizes at the roots.
-  std::vector<int32_t> root_info(count, 0);
-  for (int r = 0; r < count; ++r) {
-    runs[r].parent = runs[runs[r].parent].parent;
-    root_info[runs[r].parent] += runs[r].x1 - runs[r].x0;
-  }
+      },
+      [](int, const Run& above, const Run& below) { return above.label == below.label; },
+      [](int n, const auto& fn) {
+        cv::parallel_for_(cv::Range(0, n), [&](const cv::Range& r) { fn(r.start, r.end); });
+      });
+  const std::vector<Run>& runs = forest.runs;
+  const std::vector<int32_t>& row_begin = forest.row_begin;
+  const int count = static_cast<int>(runs.size());
+  // Piece sizes at the roots, then (at the roots) their new labels.
+  std::vector<int32_t> root_info = std::move(forest.size);
   // New labels in raster order of the pieces' first pixels (serial: a small piece takes the new
   // label of the pixel before its first pixel, left or else above, which an earlier run already
   // decided), then the pixels in parallel.
