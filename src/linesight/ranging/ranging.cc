@@ -309,13 +309,19 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   // level comes from the residuals against a wider median (radius noise_radius), which also sees
   // correlated matching errors that a 3x3 neighbourhood would hide.
   // Pixels away from the mode's silhouette (see RangingOptions::silhouette_margin_x_px).
+  // On a small obstacle the full margin may leave fewer than min_valid_pixels: the margin then
+  // shrinks one pixel at a time (both directions) until enough remain, so that the pixels nearest
+  // the silhouette -- the most fattened ones -- are still left out.
   cv::Mat interior = obstacle;
-  if (options.silhouette_margin_x_px > 0 || options.silhouette_margin_y_px > 0) {
-    interior = cv::Mat();  // a new buffer: eroding in place would shrink `obstacle` too
-    cv::erode(obstacle, interior,
-              cv::getStructuringElement(cv::MORPH_RECT, {2 * options.silhouette_margin_x_px + 1,
-                                                         2 * options.silhouette_margin_y_px + 1}));
-    if (cv::countNonZero(interior) < options.min_valid_pixels) interior = obstacle.clone();
+  for (int mx = options.silhouette_margin_x_px, my = options.silhouette_margin_y_px;
+       mx > 0 || my > 0; mx = std::max(0, mx - 1), my = std::max(0, my - 1)) {
+    cv::Mat eroded;  // a new buffer: eroding in place would shrink `obstacle` too
+    cv::erode(obstacle, eroded,
+              cv::getStructuringElement(cv::MORPH_RECT, {2 * mx + 1, 2 * my + 1}));
+    if (cv::countNonZero(eroded) >= options.min_valid_pixels) {
+      interior = eroded;
+      break;
+    }
   }
   const int r = options.smoothing_radius_px;
   const int noise_radius = std::max(4, r);

@@ -233,5 +233,21 @@ TEST(RangingTest, SilhouetteMarginRemovesEdgeFattening) {
   EXPECT_GT(with_margin.disparity_sigma_px, 0.5 * 0.02 * true_d * 0.9);
 }
 
+// On a small obstacle the full margin leaves fewer than min_valid_pixels (here a 12x10 blob: 4x4
+// after the 9x7 erosion); the margin then shrinks until enough remain instead of being dropped, so
+// a 1 px fattened rim is still left out (it would pull the distance ~2 % nearer).
+TEST(RangingTest, SilhouetteMarginShrinksOnSmallObstacles) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  const float true_d = float(g.DisparityFromDepth(3.0));
+  d(cv::Rect(118, 88, 12, 10)).setTo(1.02f * true_d);
+  d(cv::Rect(119, 89, 10, 8)).setTo(true_d);
+  const cv::Rect roi(110, 80, 28, 26);
+  const RangeResult r = RangeObstacle(d, g, roi, {.min_body_width_m = 0.0});
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_EQ(r.obstacle_pixels, 120);
+  EXPECT_NEAR(r.distance_m, 3.0, 1e-5);
+}
+
 }  // namespace
 }  // namespace linesight
