@@ -211,16 +211,25 @@ TEST(RangingTest, PiecesOutsideTheCoreAreDropped) {
   EXPECT_EQ(r.box, cv::Rect(130, 90, 40, 40));
 }
 
+// A 20 m background with an obstacle at 3 m (`inner`) inside a rim (`outer` minus `inner`) whose
+// disparity is 2 % too large, as a matcher's edge fattening leaves it.
+cv::Mat ObstacleWithFattenedRim(const StereoGeometry& g, const cv::Rect& outer,
+                                const cv::Rect& inner) {
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  const float true_d = float(g.DisparityFromDepth(3.0));
+  d(outer).setTo(1.02f * true_d);
+  d(inner).setTo(true_d);
+  return d;
+}
+
 // Edge fattening: a 3 px rim around the obstacle carries a disparity 2 % too large (the nearer side
 // of a depth edge spread by the matcher's window). Leaving the silhouette out of the percentile
 // removes the bias; with the margin disabled the rim pulls the distance ~2 % nearer, and sigma
 // reports the shift.
 TEST(RangingTest, SilhouetteMarginRemovesEdgeFattening) {
   const StereoGeometry g = TestGeometry();
-  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
   const float true_d = float(g.DisparityFromDepth(3.0));
-  d(cv::Rect(117, 87, 66, 56)).setTo(1.02f * true_d);
-  d(cv::Rect(120, 90, 60, 50)).setTo(true_d);
+  const cv::Mat d = ObstacleWithFattenedRim(g, {117, 87, 66, 56}, {120, 90, 60, 50});
   const cv::Rect roi(100, 70, 100, 90);
   const RangeResult with_margin = RangeObstacle(d, g, roi, {});
   ASSERT_TRUE(with_margin.ok()) << with_margin.reason;
@@ -238,10 +247,7 @@ TEST(RangingTest, SilhouetteMarginRemovesEdgeFattening) {
 // a 1 px fattened rim is still left out (it would pull the distance ~2 % nearer).
 TEST(RangingTest, SilhouetteMarginShrinksOnSmallObstacles) {
   const StereoGeometry g = TestGeometry();
-  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
-  const float true_d = float(g.DisparityFromDepth(3.0));
-  d(cv::Rect(118, 88, 12, 10)).setTo(1.02f * true_d);
-  d(cv::Rect(119, 89, 10, 8)).setTo(true_d);
+  const cv::Mat d = ObstacleWithFattenedRim(g, {118, 88, 12, 10}, {119, 89, 10, 8});
   const cv::Rect roi(110, 80, 28, 26);
   const RangeResult r = RangeObstacle(d, g, roi, {.min_body_width_m = 0.0});
   ASSERT_TRUE(r.ok()) << r.reason;
