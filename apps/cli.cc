@@ -75,8 +75,8 @@ void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
                  "ranging setting key=value (repeatable): near_percentile, core_fraction, "
                  "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
                  "min_body_width_px, smoothing_radius_px, checked (0|1), "
-                 "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2), "
-                 "surface_band_relative");
+                 "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
+                 "surface_disagreement_weight, surface_band_relative");
 }
 
 void ApplyRangingSettings(const std::vector<std::string>& settings,
@@ -114,6 +114,8 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
       options.model_relative_sigma = value;
     } else if (key == "surface_refinement") {
       options.surface_refinement = int(value);
+    } else if (key == "surface_disagreement_weight") {
+      options.surface_disagreement_weight = value;
     } else if (key == "surface_band_relative") {
       options.ranging.surface_band_relative = value;
     } else if (key == "search_from_zero") {

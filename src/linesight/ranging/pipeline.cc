@@ -20,8 +20,12 @@ void RangingPipelineOptions::Check() const {
   CheckOption(model_relative_sigma >= 0.0 && model_relative_sigma < 0.5,
               "RangingPipelineOptions.model_relative_sigma", model_relative_sigma,
               "must be in [0, 0.5)");
-  CheckOption(surface_refinement >= 0 && surface_refinement <= 2,
-              "RangingPipelineOptions.surface_refinement", surface_refinement, "must be 0, 1 or 2");
+  CheckOption(surface_refinement >= 0 && surface_refinement <= 3,
+              "RangingPipelineOptions.surface_refinement", surface_refinement,
+              "must be 0, 1, 2 or 3");
+  CheckOption(surface_disagreement_weight >= 0.0 && surface_disagreement_weight <= 4.0,
+              "RangingPipelineOptions.surface_disagreement_weight", surface_disagreement_weight,
+              "must be in [0, 4]");
   surface.Check();
   rectify.Check();
 }
@@ -153,13 +157,24 @@ void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* resu
       RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified, result->surface_pixels,
                              result->surface_disparity_px, options_.surface);
   if (!refined.ok) return;
+  result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
+  if (options_.surface_refinement == 3) {
+    // Two measurements of the same surface that disagree: one of them is off by about the
+    // difference.
+    const double sigma_d =
+        std::hypot(result->disparity_sigma_px,
+                   options_.surface_disagreement_weight * result->surface_check_px);
+    result->disparity_sigma_px = sigma_d;
+    result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
+    return;
+  }
   const double offset =
       options_.surface_refinement == 2 ? result->disparity_px - result->surface_disparity_px : 0.0;
   const double d = refined.disparity_px + offset;
   if (!(d + geometry_.disparity_offset_px > 0.0)) return;
   // Half the correction (refined minus matched surface disparity) joins the uncertainty: how much
   // the two measurements of the same surface disagree, like the silhouette shift in RangeObstacle.
-  const double correction = 0.5 * (refined.disparity_px - result->surface_disparity_px);
+  const double correction = 0.5 * result->surface_check_px;
   const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
                                    refined.sigma_px * refined.sigma_px + correction * correction);
   result->refined = true;

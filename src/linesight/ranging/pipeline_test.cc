@@ -20,9 +20,12 @@ TEST(RangingPipelineOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
   EXPECT_THROW(o.Check(), OptionError);
   o.model_relative_sigma = 0.0;
   EXPECT_NO_THROW(o.Check());
-  o.surface_refinement = 3;
+  o.surface_refinement = 4;
   EXPECT_THROW(o.Check(), OptionError);
   o.surface_refinement = 2;
+  o.surface_disagreement_weight = -0.5;
+  EXPECT_THROW(o.Check(), OptionError);
+  o.surface_disagreement_weight = 1.0;
   o.surface.min_pixels = 2;
   EXPECT_THROW(o.Check(), OptionError);
 }
@@ -68,7 +71,22 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   const double truth = scene.obstacles.front().distance_m;
   EXPECT_NEAR(r.distance_m, truth, 0.015 * truth);
   EXPECT_GE(r.sigma_m, options.model_relative_sigma * r.distance_m);
-  EXPECT_FALSE(r.refined);  // off by default
+  // By default the surface is measured a second time as a check only: the distance is the matched
+  // one, the disagreement joins sigma.
+  EXPECT_FALSE(r.refined);
+  ASSERT_TRUE(std::isfinite(r.surface_check_px));
+  RangingPipelineOptions unchecked = options;
+  unchecked.surface_refinement = 0;
+  const RangingPipeline plain(sim::MakeStereoCalibration(scene_options.rig), unchecked);
+  const RangeResult r0 = plain.RangeRois(frame, {roi}).front();
+  ASSERT_TRUE(r0.ok()) << r0.reason;
+  EXPECT_FALSE(std::isfinite(r0.surface_check_px));
+  EXPECT_EQ(r.distance_m, r0.distance_m);
+  EXPECT_NEAR(
+      r.disparity_sigma_px,
+      std::hypot(r0.disparity_sigma_px, options.surface_disagreement_weight * r.surface_check_px),
+      1e-12);
+  EXPECT_GE(r.sigma_m, r0.sigma_m);
 
   // The same frame with the front surface refined on the images: the damper's textured end cap
   // refines (NCC above the gate) and stays within 1.5 %; sigma grows by the refinement's terms.
@@ -81,7 +99,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   EXPECT_EQ(rr.matched_disparity_px, r.disparity_px);
   EXPECT_NE(rr.disparity_px, r.disparity_px);
   EXPECT_NEAR(rr.distance_m, truth, 0.015 * truth);
-  EXPECT_GE(rr.sigma_m, r.sigma_m);
+  EXPECT_GE(rr.sigma_m, r0.sigma_m);
 }
 
 // Every obstacle type at 0.3 m, the near end of the working range, in the default scene (the

@@ -417,6 +417,11 @@ nlohmann::json RangeResultToJson(const RangeResult& result) {
     j["surface_pixels"] = result.surface_pixels.size();
     j["refined"] = result.refined;
     j["matched_disparity_px"] = result.matched_disparity_px;
+    if (std::isfinite(result.surface_check_px)) {
+      j["surface_check_px"] = result.surface_check_px;
+    } else {
+      j["surface_check_px"] = nullptr;
+    }
   } else {
     j["status"] = "no_measurement";
     j["reason"] = result.reason;

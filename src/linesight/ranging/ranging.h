@@ -13,6 +13,7 @@
 // -> local median smoothing -> near percentile -> sigma from the residuals.
 #pragma once
 
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -114,6 +115,10 @@ struct RangeResult {
   // (RefineSurfaceDisparity): the disparity from the matched map alone, before the refinement.
   bool refined = false;
   double matched_disparity_px = 0.0;
+  // Photometric surface disparity minus the matched surface mean (px) when RangingPipeline
+  // measured the surface a second time (RangingPipelineOptions::surface_refinement 1..3), NaN
+  // otherwise.
+  double surface_check_px = std::numeric_limits<double>::quiet_NaN();
 
   bool ok() const { return status == RangeStatus::kOk; }
 };
