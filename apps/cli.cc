@@ -113,6 +113,9 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
     } else if (key == "model_relative_sigma") {
       options.model_relative_sigma = value;
     } else if (key == "surface_refinement") {
+      if (value != std::floor(value)) {
+        throw UsageError(fmt::format("--ranging '{}': expected a whole number 0..3", setting));
+      }
       options.surface_refinement = int(value);
     } else if (key == "surface_disagreement_weight") {
       options.surface_disagreement_weight = value;

@@ -357,6 +357,21 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
   ASSERT_TRUE(std::regex_search(report, m, std::regex(R"("distance_m":\s*([0-9.eE+-]+))")))
       << report;
   EXPECT_NEAR(std::stod(m[1].str()), truth, 0.01 * truth);
+  EXPECT_NE(report.find("\"surface_check_px\""), std::string::npos) << report;
+  // Ranging settings: the surface check off, and a mode that is not a whole number refused.
+  const std::string pair_args = " --rectified --calib " + (pairs / "calib.yml").string() +
+                                " --left " + (pairs / "baboon_box_2.50m_left.png").string() +
+                                " --right " + (pairs / "baboon_box_2.50m_right.png").string() +
+                                " --roi " + roi;
+  const fs::path json_off = dir_ / "range_off.json";
+  const RunResult off =
+      Run("range" + pair_args + " --ranging surface_refinement=0 --json " + json_off.string());
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  EXPECT_NE(Slurp(json_off).find("\"surface_check_px\": null"), std::string::npos)
+      << Slurp(json_off);
+  const RunResult fraction = Run("range" + pair_args + " --ranging surface_refinement=2.5");
+  EXPECT_NE(fraction.exit_code, 0);
+  EXPECT_NE(fraction.err.find("surface_refinement=2.5"), std::string::npos) << fraction.err;
   // The same calibration with a pair of another size is an error naming the file.
   const RunResult bad =
       Run("range --rectified --calib " + (pairs / "calib.yml").string() + " --left " +

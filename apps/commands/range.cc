@@ -22,7 +22,7 @@ int RunRange(int argc, char** argv) {
       "Distance to obstacles: nearest surface along the optical axis, with a 1-sigma uncertainty.",
       "range"};
   std::string calib_path, left_path, right_path, json_path, disparity_out;
-  std::vector<std::string> roi_texts, raw_params;
+  std::vector<std::string> roi_texts, raw_params, ranging_settings;
   bool automatic = false;
   RangingPipelineOptions options;
   app.add_option("--calib", calib_path, "stereo calibration (OpenCV YAML)")->required();
@@ -48,9 +48,11 @@ int RunRange(int argc, char** argv) {
   app.add_flag(
       "!--no-search-from-zero", options.search_from_zero,
       "search only the working range's disparities (the background may then match falsely)");
+  AddRangingSettingsOption(app, &ranging_settings);
   app.add_option("--disparity-out", disparity_out, "also write the disparity (PFM)");
   app.add_option("--json", json_path, "report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {
+    ApplyRangingSettings(ranging_settings, &options);
     if (roi_texts.empty() && !automatic)
       throw UsageError("give at least one --roi x,y,w,h or --auto");
     std::vector<cv::Rect> rois;

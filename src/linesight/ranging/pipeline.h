@@ -49,10 +49,11 @@ struct RangingPipelineOptions {
   // Measure each result's nearest surface a second time on the rectified images
   // (RefineSurfaceDisparity: one disparity for the surface pixels by NCC, nothing outside them):
   // 0 = off; 1 = the refined surface disparity is the result; 2 = the refined surface disparity
-  // plus the matched map's offset of d_near above the surface's mean (in 1 and 2 half the
-  // refined - matched difference joins sigma_d); 3 (default) = a check: the distance stays the
-  // matched one and surface_disagreement_weight * (refined - matched) joins sigma_d in quadrature.
-  // Why 3 and not 2: as a distance, the refined value fixes the insulator's thin rims at 1.5-3.5 m
+  // plus the matched map's offset of d_near above the surface's mean (in 1 and 2 the
+  // refinement's noise and half the refined - matched difference join sigma_d); 3 (default) = a
+  // check: the distance stays the matched one and surface_disagreement_weight * (refined - matched)
+  // joins sigma_d in quadrature. Why 3 and not 2: as a distance, the refined value fixes the
+  // insulator's thin rims at 1.5-3.5 m
   // (+1.1..+1.7 % -> +0.1..+0.8 %, `eval ranging`, true calibration) but breaks others (the
   // surface pixels picked from the matched map include the conductor entering a clamp: clamp at
   // 3 m -1.5..-3.6 %; with the estimated calibration the insulator at 3-4 m reads 1.4-1.9 % too

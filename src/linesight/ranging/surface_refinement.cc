@@ -133,6 +133,9 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
   if (best == 0 || best == 2 * steps) {
     out.reason = fmt::format("the correlation peaks at the edge of the search {:.2f}..{:.2f} px",
                              d_min, d_max);
+    out.at_search_edge = true;
+    out.disparity_px = d_min + best * options.step_px;
+    out.ncc = scores[size_t(best)];
     return out;
   }
   // Parabola through the best grid point and its neighbours, then the peak itself.

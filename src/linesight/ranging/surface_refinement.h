@@ -42,6 +42,9 @@ struct SurfaceRefinement {
   double sigma_px = 0;      // its noise standard error: sigma_e / sqrt(sum of (dR/dx)^2)
   double ncc = 0;           // the peak's NCC
   int pixels = 0;           // pixels of S used (those whose match stays inside the right image)
+  // Not ok because the correlation is highest at an end of the search window: disparity_px and
+  // ncc are then that end's (the true peak lies at or beyond it).
+  bool at_search_edge = false;
 };
 
 // `left`, `right`: the rectified pair (8-bit grey or BGR, same size); `pixels`: S in left image

@@ -78,12 +78,19 @@ TEST(SurfaceRefinementTest, RefusesWhatItCannotMeasure) {
   SurfaceRefinementOptions narrow;
   narrow.search_px = 0.5;
   narrow.search_relative = 0.0;
-  EXPECT_FALSE(RefineSurfaceDisparity(left, right, pixels, 10.0, narrow).ok);
+  const SurfaceRefinement at_edge = RefineSurfaceDisparity(left, right, pixels, 10.0, narrow);
+  EXPECT_FALSE(at_edge.ok);
+  // The correlation rises towards the true 12.3 px: highest at the window's upper end, reported.
+  EXPECT_TRUE(at_edge.at_search_edge);
+  EXPECT_NEAR(at_edge.disparity_px, 10.5, 1e-9);
+  EXPECT_GT(at_edge.ncc, 0.0);
   // A textureless surface has no correlation peak.
   const cv::Mat flat(120, 200, CV_8U, cv::Scalar(90));
   const SurfaceRefinement f =
       RefineSurfaceDisparity(flat, flat, pixels, 12.0, SurfaceRefinementOptions());
   EXPECT_FALSE(f.ok);
+  // (Every correlation is undefined: if reported as an edge, its NCC is far below the gate.)
+  EXPECT_TRUE(!f.at_search_edge || f.ncc < SurfaceRefinementOptions().min_ncc);
   EXPECT_FALSE(f.reason.empty());
   // Too few pixels.
   const std::vector<cv::Point> few(pixels.begin(), pixels.begin() + 5);
