@@ -156,13 +156,14 @@ void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* resu
   const SurfaceRefinement refined =
       RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified, result->surface_pixels,
                              result->surface_disparity_px, options_.surface);
+  const double check = refined.disparity_px - result->surface_disparity_px;
   if (options_.surface_refinement == 3) {
     // Two measurements of the same surface that disagree: one of them is off by about the
     // difference. A correlation that is highest at an end of the search window (and high enough
     // there to be a surface's) says they differ by at least the window: that end is used.
     const bool edge = refined.at_search_edge && refined.ncc >= options_.surface.min_ncc;
     if (!refined.ok && !edge) return;
-    result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
+    result->surface_check_px = check;
     const double sigma_d =
         std::hypot(result->disparity_sigma_px,
                    options_.surface_disagreement_weight * result->surface_check_px);
@@ -175,10 +176,10 @@ void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* resu
       options_.surface_refinement == 2 ? result->disparity_px - result->surface_disparity_px : 0.0;
   const double d = refined.disparity_px + offset;
   if (!(d + geometry_.disparity_offset_px > 0.0)) return;
-  result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
+  result->surface_check_px = check;
   // Half the correction (refined minus matched surface disparity) joins the uncertainty: how much
   // the two measurements of the same surface disagree, like the silhouette shift in RangeObstacle.
-  const double correction = 0.5 * result->surface_check_px;
+  const double correction = 0.5 * check;
   const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
                                    refined.sigma_px * refined.sigma_px + correction * correction);
   result->refined = true;

@@ -53,14 +53,14 @@ struct RangingPipelineOptions {
   // refinement's noise and half the refined - matched difference join sigma_d); 3 (default) = a
   // check: the distance stays the matched one and surface_disagreement_weight * (refined - matched)
   // joins sigma_d in quadrature. Why 3 and not 2: as a distance, the refined value fixes the
-  // insulator's thin rims at 1.5-3.5 m
-  // (+1.1..+1.7 % -> +0.1..+0.8 %, `eval ranging`, true calibration) but breaks others (the
-  // surface pixels picked from the matched map include the conductor entering a clamp: clamp at
-  // 3 m -1.5..-3.6 %; with the estimated calibration the insulator at 3-4 m reads 1.4-1.9 % too
-  // near). As a check it does what neither measurement alone can: where the two disagree, one of
-  // them is biased by about the difference, which is what sigma must then cover (`eval ranging`,
-  // 50 runs, estimated calibration: +-2 sigma coverage of the insulator at 2 / 2.5 m 14 / 56 % ->
-  // 100 / 98 %, 39 of 39 cells covered; on the damper and the clamp sigma grows by at most 1.13x).
+  // insulator's thin rims at 1.5-3.5 m (+1.1..+1.7 % -> +0.1..+0.8 %, `eval ranging`, true
+  // calibration) but breaks others (the surface pixels picked from the matched map include the
+  // conductor entering a clamp: clamp at 3 m -1.5..-3.6 %; with the estimated calibration the
+  // insulator at 3-4 m reads 1.4-1.9 % too near). As a check it does what neither measurement alone
+  // can: where the two disagree, one of them is biased by about the difference, which is what sigma
+  // must then cover (`eval ranging`, 50 runs, estimated calibration: +-2 sigma coverage of the
+  // insulator at 2 / 2.5 m 14 / 56 % -> 100 / 98 %, 39 of 39 cells covered; on the damper and the
+  // clamp sigma grows by at most 1.13x).
   int surface_refinement = 3;
   double surface_disagreement_weight = 1.0;  // mode 3's weight, in [0, 4]
   SurfaceRefinementOptions surface;
