@@ -69,11 +69,39 @@ void MakeSyntheticPair(const BenchSize& size, cv::Mat* left, cv::Mat* right) {
   }
 }
 
-std::unique_ptr<StereoMatcher> CreateBenchMatcher(const std::string& method, const BenchSize& size,
+}  // namespace
+
+void SplitBenchMethod(const std::string& spec, std::string* method,
+                      std::map<std::string, std::string>* params) {
+  const size_t colon = spec.find(':');
+  *method = spec.substr(0, colon);
+  if (method->empty()) throw UsageError(fmt::format("bench method '{}': no matcher name", spec));
+  size_t begin = colon;
+  while (begin != std::string::npos) {
+    const size_t end = spec.find(':', begin + 1);
+    const std::string item =
+        spec.substr(begin + 1, end == std::string::npos ? end : end - begin - 1);
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) {
+      throw UsageError(fmt::format(
+          "bench method '{}': '{}' is not key=value (expected NAME[:key=value...], e.g. "
+          "isgm:paths=8)",
+          spec, item));
+    }
+    (*params)[item.substr(0, eq)] = item.substr(eq + 1);
+    begin = end;
+  }
+}
+
+namespace {
+
+std::unique_ptr<StereoMatcher> CreateBenchMatcher(const std::string& spec, const BenchSize& size,
                                                   int threads) {
   MatcherOptions options;
   options.num_disparities = size.num_disparities;
   options.threads = threads;
+  std::string method;
+  SplitBenchMethod(spec, &method, &options.params);
   if (method == "sgbm-3way" || method == "sgbm-hh") {
     options.params["mode"] = method == "sgbm-3way" ? "3way" : "hh";
     return CreateMatcher("sgbm", options);
@@ -81,7 +109,10 @@ std::unique_ptr<StereoMatcher> CreateBenchMatcher(const std::string& method, con
   return CreateMatcher(method, options);
 }
 
-bool IsKnownMethod(const std::string& method) {
+bool IsKnownMethod(const std::string& spec) {
+  std::string method;
+  std::map<std::string, std::string> params;
+  SplitBenchMethod(spec, &method, &params);
   if (method == "sgbm-3way" || method == "sgbm-hh") return true;
   const auto names = MatcherNames();
   return std::find(names.begin(), names.end(), method) != names.end();
@@ -239,6 +270,13 @@ BenchReport RunThroughputBench(const BenchOptions& options,
       if (!IsKnownMethod(options.methods[m])) {
         rows[m].skipped = true;
         rows[m].note = "not registered in the matcher factory";
+      } else {
+        // Settings errors (unknown key, bad value) stop the run here, not in every child.
+        try {
+          CreateBenchMatcher(options.methods[m], size, options.threads);
+        } catch (const std::exception& e) {
+          throw UsageError(fmt::format("bench method '{}': {}", options.methods[m], e.what()));
+        }
       }
     }
     // Round-robin: every round measures each method once, in the same order.

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,11 @@ struct BenchSize {
   int num_disparities = 128;  // disparities searched
 };
 
+// "isgm:paths=8:p1=10" -> method "isgm", params {paths: 8, p1: 10}; throws UsageError for an
+// item that is not key=value.
+void SplitBenchMethod(const std::string& spec, std::string* method,
+                      std::map<std::string, std::string>* params);
+
 // "752x480x128" -> {752, 480, 128}; throws UsageError otherwise.
 BenchSize ParseBenchSize(const std::string& text);
 
@@ -27,7 +33,9 @@ struct BenchOptions {
   // at 128.
   std::vector<BenchSize> sizes = {{752, 480, 128}, {752, 480, 192}, {1242, 375, 128}};
   // Methods: any CreateMatcher name, plus "sgbm-3way" and "sgbm-hh" (OpenCV StereoSGBM in that
-  // mode). A method the factory does not know (e.g. isgm before it exists) is reported as skipped.
+  // mode), optionally with the method's --param settings: NAME[:key=value...] (e.g.
+  // "isgm:paths=8", to compare settings in one run). A method the factory does not know (e.g.
+  // isgm before it exists) is reported as skipped; bad settings throw UsageError.
   std::vector<std::string> methods = {"sgm", "isgm", "sgbm-3way", "sgbm-hh"};
   int runs = 7;  // timed runs per (method, size) and round
   // Rounds over the method list per size (method A, B, C, A, B, C, ...): load drift on a shared

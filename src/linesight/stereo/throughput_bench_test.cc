@@ -1,6 +1,8 @@
 #include "linesight/stereo/throughput_bench.h"
 
 #include <algorithm>
+#include <map>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -57,6 +59,40 @@ TEST(ThroughputBench, RejectsZeroRounds) {
   BenchOptions options;
   options.rounds = 0;
   EXPECT_THROW(options.Check(), OptionError);
+}
+
+TEST(ThroughputBench, MethodSettingsFollowTheName) {
+  std::string method;
+  std::map<std::string, std::string> params;
+  SplitBenchMethod("isgm:paths=8:p1=10", &method, &params);
+  EXPECT_EQ(method, "isgm");
+  EXPECT_EQ(params, (std::map<std::string, std::string>{{"paths", "8"}, {"p1", "10"}}));
+  params.clear();
+  SplitBenchMethod("sgbm-3way", &method, &params);
+  EXPECT_EQ(method, "sgbm-3way");
+  EXPECT_TRUE(params.empty());
+  EXPECT_THROW(SplitBenchMethod("isgm:paths", &method, &params), UsageError);
+  EXPECT_THROW(SplitBenchMethod("isgm:=4", &method, &params), UsageError);
+  EXPECT_THROW(SplitBenchMethod(":paths=4", &method, &params), UsageError);
+}
+
+TEST(ThroughputBench, MeasuresTwoSettingsOfOneMethodApart) {
+  BenchOptions options;
+  options.sizes = {{96, 64, 21}};
+  options.methods = {"sgm:paths=4", "sgm:paths=8"};
+  options.runs = 1;
+  options.warmup = 0;
+  options.rounds = 1;
+  options.threads = 1;
+  const BenchReport report = RunThroughputBench(options, [](const BenchRow&) {});
+  ASSERT_EQ(report.rows.size(), 2u);
+  for (const BenchRow& row : report.rows) EXPECT_FALSE(row.skipped) << row.method << row.note;
+  EXPECT_EQ(report.rows[0].method, "sgm:paths=4");
+  // A setting the method does not have stops the run before any child is forked.
+  options.methods = {"sgm:no_such_key=1"};
+  EXPECT_THROW(RunThroughputBench(options, [](const BenchRow&) {}), UsageError);
+  options.methods = {"sgm:paths=5"};
+  EXPECT_THROW(RunThroughputBench(options, [](const BenchRow&) {}), UsageError);
 }
 
 }  // namespace
