@@ -269,10 +269,13 @@ void SgmMatcher::Run(const cv::Mat& left_input, const cv::Mat& right_input, bool
         continue;
       }
       const int best = row.best[x];
-      const int best_cost = row.best_cost[x], second = row.second_cost[x];
+      const int best_cost = row.best_cost[x];
       SgmInvalid why = SgmInvalid::kValid;
-      if (static_cast<int64_t>(second) * (100 - o.uniqueness_ratio) <
-          static_cast<int64_t>(best_cost) * 100) {
+      // second >= best_cost always, so a ratio of 0 rejects nothing (and then the WTA may skip the
+      // second best).
+      if (o.uniqueness_ratio > 0 &&
+          static_cast<int64_t>(row.second_cost[x]) * (100 - o.uniqueness_ratio) <
+              static_cast<int64_t>(best_cost) * 100) {
         why = SgmInvalid::kUniqueness;
       } else if (o.lr_max_diff >= 0 &&
                  !detail::LeftRightConsistent(x, best, row.right_best, w, dmin, o.lr_max_diff)) {
@@ -307,7 +310,7 @@ void SgmMatcher::Run(const cv::Mat& left_input, const cv::Mat& right_input, bool
     } else {
       row_costs.resize(2 * static_cast<size_t>(w));
       row.best_cost = row_costs.data();
-      row.second_cost = row_costs.data() + w;
+      row.second_cost = o.uniqueness_ratio > 0 ? row_costs.data() + w : nullptr;
     }
     detail::WinnerTakesAllRow(sum_row, w, num, dmin, row, right_scratch.data());
     if (detailed) {

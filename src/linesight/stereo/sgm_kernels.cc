@@ -773,7 +773,7 @@ HWY_INLINE V ShiftUpOneLane(D /*d*/, V cur, V below) {
 // The same with kVectors = padded / Lanes vectors per pixel known at compile time: the pixel's
 // costs and the shift register stay in registers, and the winner's index is found without branches
 // (the smallest index among the lanes equal to the minimum).
-template <int kVectors>
+template <int kVectors, bool kSecond>
 void WinnerTakesAllRowRegisters(const uint16_t* sum_row, int width, int min_disparity, WtaRow out) {
   const hn::ScalableTag<uint16_t> d;
   using V = hn::Vec<decltype(d)>;
@@ -811,15 +811,17 @@ void WinnerTakesAllRowRegisters(const uint16_t* sum_row, int width, int min_disp
       index = hn::Min(index, hn::IfThenElse(hn::Eq(costs[v], best_cost_v), iota[v], all_ones));
     }
     const int best = SmallestLane(d, index);
-    // Second best more than one disparity away.
-    const uint16_t* window = excluded + padded - best;
-    V second = all_ones;
-    for (int v = 0; v < kVectors; ++v) {
-      second = hn::Min(second, hn::Or(costs[v], hn::LoadU(d, window + v * n)));
-    }
     out.best[x] = static_cast<int16_t>(best);
     out.best_cost[x] = best_cost;
-    out.second_cost[x] = SmallestLane(d, second);
+    if constexpr (kSecond) {
+      // Second best more than one disparity away.
+      const uint16_t* window = excluded + padded - best;
+      V second = all_ones;
+      for (int v = 0; v < kVectors; ++v) {
+        second = hn::Min(second, hn::Or(costs[v], hn::LoadU(d, window + v * n)));
+      }
+      out.second_cost[x] = SmallestLane(d, second);
+    }
     // Right view: every lane moves up by one, then lanes k < padded take S(x, k) when smaller.
     run_cost[kVectors] = ShiftUpOneLane(d, run_cost[kVectors], run_cost[kVectors - 1]);
     run_k[kVectors] = ShiftUpOneLane(d, run_k[kVectors], run_k[kVectors - 1]);
@@ -845,9 +847,13 @@ void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_dispariti
   std::fill(out.right_best, out.right_best + width, int16_t{-1});
 #if LINESIGHT_SGM_SHIFT_REGISTER
   switch (padded / n) {
-#define LINESIGHT_SGM_WTA_CASE(count)                                      \
-  case count:                                                              \
-    WinnerTakesAllRowRegisters<count>(sum_row, width, min_disparity, out); \
+#define LINESIGHT_SGM_WTA_CASE(count)                                               \
+  case count:                                                                       \
+    if (out.second_cost != nullptr) {                                               \
+      WinnerTakesAllRowRegisters<count, true>(sum_row, width, min_disparity, out);  \
+    } else {                                                                        \
+      WinnerTakesAllRowRegisters<count, false>(sum_row, width, min_disparity, out); \
+    }                                                                               \
     return;
     LINESIGHT_SGM_WTA_CASE(2)
     LINESIGHT_SGM_WTA_CASE(4)
@@ -891,18 +897,20 @@ void WinnerTakesAllRowImpl(const uint16_t* sum_row, int width, int num_dispariti
       const int candidate = idx >= 0 ? k + static_cast<int>(idx) : padded;
       best = std::min(best, candidate);
     }
-    // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are
-    // excluded.
-    const auto low = hn::Set(d, static_cast<uint16_t>(best - 1));
-    auto second = all_ones;
-    for (int k = 0; k < padded; k += n) {
-      const auto v = hn::LoadU(d, s + k);
-      const auto offset = hn::Sub(hn::Iota(d, static_cast<uint16_t>(k)), low);
-      second = hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), second, hn::Min(second, v));
-    }
     out.best[x] = static_cast<int16_t>(best);
     out.best_cost[x] = best_cost;
-    out.second_cost[x] = SmallestLane(d, second);
+    if (out.second_cost != nullptr) {
+      // Second best more than one disparity away: lanes with (k - (best - 1)) mod 2^16 <= 2 are
+      // excluded.
+      const auto low = hn::Set(d, static_cast<uint16_t>(best - 1));
+      auto second = all_ones;
+      for (int k = 0; k < padded; k += n) {
+        const auto v = hn::LoadU(d, s + k);
+        const auto offset = hn::Sub(hn::Iota(d, static_cast<uint16_t>(k)), low);
+        second = hn::IfThenElse(hn::Eq(hn::Min(offset, two), offset), second, hn::Min(second, v));
+      }
+      out.second_cost[x] = SmallestLane(d, second);
+    }
 #if LINESIGHT_SGM_SHIFT_REGISTER
     // The top vector only shifts; the others shift and take S(x, k) where it is smaller.
     hn::StoreU(

@@ -463,6 +463,16 @@ TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
           ASSERT_EQ(second[x], r.second[i]) << Describe(c) << " x=" << x << " y=" << y;
           ASSERT_EQ(right_best[x], r.right_best[i]) << Describe(c) << " xr=" << x << " y=" << y;
         }
+        // Without the second best (what Compute asks for when the uniqueness ratio is 0) the other
+        // outputs are the same.
+        std::vector<int16_t> best_only(c.width, -7), right_only(c.width, -7);
+        std::vector<uint16_t> cost_only(c.width, 7);
+        detail::WinnerTakesAllRow(sum_row(y), c.width, num, c.min_disparity,
+                                  {best_only.data(), cost_only.data(), nullptr, right_only.data()},
+                                  scratch.data());
+        ASSERT_EQ(best_only, best) << Describe(c) << " y=" << y;
+        ASSERT_EQ(cost_only, best_cost) << Describe(c) << " y=" << y;
+        ASSERT_EQ(right_only, right_best) << Describe(c) << " y=" << y;
       }
     }
   }

@@ -162,7 +162,7 @@ void AggregatePaths(const AggregationInput& input, int threads, SumVolume* sum,
 struct WtaRow {
   int16_t* best = nullptr;          // width
   uint16_t* best_cost = nullptr;    // width
-  uint16_t* second_cost = nullptr;  // width
+  uint16_t* second_cost = nullptr;  // width; nullptr = not needed (not computed)
   int16_t* right_best = nullptr;    // width
 };
 // `right_scratch` holds WtaScratchSize(width, num_disparities) uint16.
