@@ -151,7 +151,7 @@ MiddleburyCheck RunMiddleburyCheck(const std::filesystem::path& dir,
   mo.min_disparity = 0;
   mo.num_disparities = ndisp;
   mo.threads = base.threads;
-  mo.params = base.params;
+  mo.params = RangingMatcherParams(base.method, base.params);  // the chain's settings
   auto matcher = CreateMatcher(base.method.empty() ? DefaultMatcherName() : base.method, mo);
   const cv::Mat disparity = matcher->Compute(left, right);
   const cv::Mat z = DepthFromDisparity(disparity, g);

@@ -11,6 +11,13 @@
 
 namespace linesight {
 
+std::map<std::string, std::string> RangingMatcherParams(const std::string& method,
+                                                        std::map<std::string, std::string> params) {
+  const std::string name = method.empty() ? DefaultMatcherName() : method;
+  if (name == "isgm") params.emplace("paths", "8");  // keeps a "paths" the caller set
+  return params;
+}
+
 void RangingPipelineOptions::Check() const {
   CheckOption(min_depth_m > 0.0, "RangingPipelineOptions.min_depth_m", min_depth_m, "must be > 0");
   CheckOption(max_depth_m > min_depth_m, "RangingPipelineOptions.max_depth_m", max_depth_m,
@@ -64,7 +71,7 @@ RangingPipeline::RangingPipeline(const StereoCalibration& calib,
   matcher_options.min_disparity = search_range_.min_disparity;
   matcher_options.num_disparities = search_range_.num_disparities;
   matcher_options.threads = options_.threads;
-  matcher_options.params = options_.params;
+  matcher_options.params = RangingMatcherParams(method_, options_.params);
   matcher_ = CreateMatcher(method_, matcher_options);
 }
 

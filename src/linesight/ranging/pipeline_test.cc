@@ -34,6 +34,23 @@ TEST(RangingPipelineOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
 // calibration: the checked map is isgm's SGM stage (a subset of the dense map: most of the
 // textureless sky and terrain is left invalid), and the distance is within 1.5 % with the model
 // sigma included.
+TEST(RangingPipelineTest, IsgmRunsWithEightPathsUnlessTheCallerSetsThem) {
+  using Params = std::map<std::string, std::string>;
+  EXPECT_EQ(RangingMatcherParams("isgm", {}), (Params{{"paths", "8"}}));
+  EXPECT_EQ(RangingMatcherParams("isgm", {{"paths", "4"}, {"p1", "10"}}),
+            (Params{{"paths", "4"}, {"p1", "10"}}));
+  EXPECT_EQ(RangingMatcherParams("sgbm", {{"block", "5"}}), (Params{{"block", "5"}}));
+  EXPECT_EQ(RangingMatcherParams("", {}), (Params{{"paths", "8"}}));  // the default is isgm
+  // The chain's matcher reports the setting it runs with.
+  sim::PowerLineSceneOptions scene_options;
+  RangingPipelineOptions options;
+  const RangingPipeline pipeline(sim::MakeStereoCalibration(scene_options.rig), options);
+  EXPECT_EQ(pipeline.matcher().Settings()["sgm"]["paths"], 8);
+  options.params = {{"paths", "4"}};
+  const RangingPipeline four(sim::MakeStereoCalibration(scene_options.rig), options);
+  EXPECT_EQ(four.matcher().Settings()["sgm"]["paths"], 4);
+}
+
 TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   sim::PowerLineSceneOptions scene_options;
   scene_options.sensor.supersampling = 1;

@@ -16,6 +16,7 @@ SgmOptions IsgmDefaultSgmOptions() {
   o.p1 = 14;
   o.p2 = 100;
   o.p2_gradient_alpha = 4;
+  o.num_paths = 4;  // see isgm.h: as accurate as 8 after the refinement, 1.2x faster
   return o;
 }
 
