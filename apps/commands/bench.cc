@@ -24,9 +24,11 @@ int RunBench(int argc, char** argv) {
   app.add_option("--sizes", sizes, "WIDTHxHEIGHTxDISPARITIES list (comma-separated)")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--methods", options.methods,
-                 "matcher names (any of the factory's, plus sgbm-3way and sgbm-hh); unknown ones "
-                 "are skipped")
+  app.add_option(
+         "--methods", options.methods,
+         "matcher names (any of the factory's, plus sgbm-3way and sgbm-hh), each optionally "
+         "with --param settings as NAME:key=value[:key=value...] (e.g. isgm:paths=8); "
+         "unknown names are skipped; ratios are against the row named sgbm-3way")
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--runs", options.runs, "timed runs per method, size and round")

@@ -88,7 +88,10 @@ void SplitBenchMethod(const std::string& spec, std::string* method,
           "isgm:paths=8)",
           spec, item));
     }
-    (*params)[item.substr(0, eq)] = item.substr(eq + 1);
+    if (!params->emplace(item.substr(0, eq), item.substr(eq + 1)).second) {
+      throw UsageError(
+          fmt::format("bench method '{}': '{}' is set twice", spec, item.substr(0, eq)));
+    }
     begin = end;
   }
 }
@@ -103,6 +106,10 @@ std::unique_ptr<StereoMatcher> CreateBenchMatcher(const std::string& spec, const
   std::string method;
   SplitBenchMethod(spec, &method, &options.params);
   if (method == "sgbm-3way" || method == "sgbm-hh") {
+    if (options.params.count("mode") != 0) {
+      // (RunThroughputBench names the method in front of this message.)
+      throw UsageError(fmt::format("{} sets the mode itself (use sgbm:mode=...)", method));
+    }
     options.params["mode"] = method == "sgbm-3way" ? "3way" : "hh";
     return CreateMatcher("sgbm", options);
   }

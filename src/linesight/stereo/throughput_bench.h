@@ -21,7 +21,7 @@ struct BenchSize {
 };
 
 // "isgm:paths=8:p1=10" -> method "isgm", params {paths: 8, p1: 10}; throws UsageError for an
-// item that is not key=value.
+// item that is not key=value and for a key given twice.
 void SplitBenchMethod(const std::string& spec, std::string* method,
                       std::map<std::string, std::string>* params);
 
@@ -35,7 +35,8 @@ struct BenchOptions {
   // Methods: any CreateMatcher name, plus "sgbm-3way" and "sgbm-hh" (OpenCV StereoSGBM in that
   // mode), optionally with the method's --param settings: NAME[:key=value...] (e.g.
   // "isgm:paths=8", to compare settings in one run). A method the factory does not know (e.g.
-  // isgm before it exists) is reported as skipped; bad settings throw UsageError.
+  // isgm before it exists) is reported as skipped; bad settings throw UsageError. The ratios are
+  // taken against the row named exactly "sgbm-3way".
   std::vector<std::string> methods = {"sgm", "isgm", "sgbm-3way", "sgbm-hh"};
   int runs = 7;  // timed runs per (method, size) and round
   // Rounds over the method list per size (method A, B, C, A, B, C, ...): load drift on a shared

@@ -74,6 +74,8 @@ TEST(ThroughputBench, MethodSettingsFollowTheName) {
   EXPECT_THROW(SplitBenchMethod("isgm:paths", &method, &params), UsageError);
   EXPECT_THROW(SplitBenchMethod("isgm:=4", &method, &params), UsageError);
   EXPECT_THROW(SplitBenchMethod(":paths=4", &method, &params), UsageError);
+  params.clear();
+  EXPECT_THROW(SplitBenchMethod("isgm:paths=4:paths=8", &method, &params), UsageError);
 }
 
 TEST(ThroughputBench, MeasuresTwoSettingsOfOneMethodApart) {
@@ -92,6 +94,8 @@ TEST(ThroughputBench, MeasuresTwoSettingsOfOneMethodApart) {
   options.methods = {"sgm:no_such_key=1"};
   EXPECT_THROW(RunThroughputBench(options, [](const BenchRow&) {}), UsageError);
   options.methods = {"sgm:paths=5"};
+  EXPECT_THROW(RunThroughputBench(options, [](const BenchRow&) {}), UsageError);
+  options.methods = {"sgbm-3way:mode=hh"};  // the name sets the mode
   EXPECT_THROW(RunThroughputBench(options, [](const BenchRow&) {}), UsageError);
 }
 
