@@ -72,7 +72,7 @@ def main():
     r1e, r2e, p1e, p2e = rectify(est)
     f, cx, cy = p1[0, 0], p1[0, 2], p1[1, 2]
     z = args.depth
-    us, vs = np.meshgrid(np.arange(args.step // 2, w, args.step), np.arange(args.step // 2, h, args.step))
+    grid_u, grid_v = np.meshgrid(np.arange(args.step // 2, w, args.step), np.arange(args.step // 2, h, args.step))
     points = []
     for text in args.at:
         try:
@@ -80,10 +80,10 @@ def main():
         except ValueError:
             parser.error(f"--at {text!r}: expected U,V (two numbers)")
         points.append((u, v))
-    us = np.concatenate([us.ravel(), [p[0] for p in points]]).astype(np.float64)
-    vs_all = np.concatenate([vs.ravel(), [p[1] for p in points]]).astype(np.float64)
-    grid_shape = vs.shape
-    vs = vs_all
+    # The grid's pixels, then the --at pixels, in one pass.
+    us = np.concatenate([grid_u.ravel(), [p[0] for p in points]]).astype(np.float64)
+    vs = np.concatenate([grid_v.ravel(), [p[1] for p in points]]).astype(np.float64)
+    grid_shape, n = grid_u.shape, grid_u.size
     rect = np.stack([(us - cx) / f * z, (vs - cy) / f * z, np.full(us.shape, z)], -1).reshape(-1, 3)
     left = (r1.T @ rect.T).T  # true left camera frame
     q_left, _ = cv2.projectPoints(left, np.zeros(3), np.zeros(3), true["M1"], true["D1"])
@@ -95,7 +95,6 @@ def main():
     z_est = -p2e[0, 3] / disparity
     rel = (z_est - z) / z * 100.0
     dy = el[:, 1] - er[:, 1]
-    n = grid_shape[0] * grid_shape[1]
     gu, gv, grel, gdy = us[:n], vs[:n], rel[:n], dy[:n]
     np.set_printoptions(linewidth=250, precision=2, suppress=True, threshold=100000)
     cols = f"u = {gu[0]:.0f}..{gu[grid_shape[1] - 1]:.0f} step {args.step}"
