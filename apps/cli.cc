@@ -76,7 +76,8 @@ void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
                  "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
                  "min_body_width_px, smoothing_radius_px, checked (0|1), "
                  "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
-                 "surface_disagreement_weight, surface_band_relative");
+                 "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
+                 "surface_min_ncc, surface_min_pixels, surface_interior (0|1)");
 }
 
 void ApplyRangingSettings(const std::vector<std::string>& settings,
@@ -119,6 +120,18 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
       options.surface_refinement = int(value);
     } else if (key == "surface_disagreement_weight") {
       options.surface_disagreement_weight = value;
+    } else if (key == "surface_gradient_ratio") {
+      options.surface.gradient_ratio = value;
+    } else if (key == "surface_interior") {
+      options.surface.interior_only = value != 0.0;
+    } else if (key == "surface_min_pixels") {
+      if (value != std::floor(value) || value < 3 || value > 1e6) {
+        throw UsageError(
+            fmt::format("--ranging '{}': expected a whole number 3..1000000", setting));
+      }
+      options.surface.min_pixels = int(value);
+    } else if (key == "surface_min_ncc") {
+      options.surface.min_ncc = value;
     } else if (key == "surface_band_relative") {
       options.ranging.surface_band_relative = value;
     } else if (key == "search_from_zero") {

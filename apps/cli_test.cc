@@ -372,6 +372,18 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
   const RunResult fraction = Run("range" + pair_args + " --ranging surface_refinement=2.5");
   EXPECT_NE(fraction.exit_code, 0);
   EXPECT_NE(fraction.err.find("surface_refinement=2.5"), std::string::npos) << fraction.err;
+  // The fit's settings: the old check-only default runs; bad values are refused by name.
+  const RunResult old_default =
+      Run("range" + pair_args +
+          " --ranging surface_refinement=3 --ranging surface_gradient_ratio=0"
+          " --ranging surface_interior=0 --ranging surface_min_ncc=0.9");
+  EXPECT_EQ(old_default.exit_code, 0) << old_default.err;
+  const RunResult pixels = Run("range" + pair_args + " --ranging surface_min_pixels=2.5");
+  EXPECT_NE(pixels.exit_code, 0);
+  EXPECT_NE(pixels.err.find("surface_min_pixels=2.5"), std::string::npos) << pixels.err;
+  const RunResult ratio = Run("range" + pair_args + " --ranging surface_gradient_ratio=-1");
+  EXPECT_NE(ratio.exit_code, 0);
+  EXPECT_NE(ratio.err.find("gradient_ratio"), std::string::npos) << ratio.err;
   // The same calibration with a pair of another size is an error naming the file.
   const RunResult bad =
       Run("range --rectified --calib " + (pairs / "calib.yml").string() + " --left " +

@@ -160,39 +160,49 @@ std::vector<RangeResult> RangingPipeline::RangeAuto(const RangingFrame& frame) c
 
 void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* result) const {
   if (!result->ok() || options_.surface_refinement == 0 || frame.left_rectified.empty()) return;
-  const SurfaceRefinement refined =
-      RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified, result->surface_pixels,
-                             result->surface_disparity_px, options_.surface);
-  const double check = refined.disparity_px - result->surface_disparity_px;
-  if (options_.surface_refinement == 3) {
-    // Two measurements of the same surface that disagree: one of them is off by about the
-    // difference. A correlation that is highest at an end of the search window (and high enough
-    // there to be a surface's) says they differ by at least the window: that end is used.
-    const bool edge = refined.at_search_edge && refined.ncc >= options_.surface.min_ncc;
-    if (!refined.ok && !edge) return;
-    result->surface_check_px = check;
-    const double sigma_d =
-        std::hypot(result->disparity_sigma_px,
-                   options_.surface_disagreement_weight * result->surface_check_px);
-    result->disparity_sigma_px = sigma_d;
-    result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
-    return;
+  auto refine = [&](const SurfaceRefinementOptions& surface) {
+    return RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified,
+                                  result->surface_pixels, result->surface_disparity_px, surface);
+  };
+  SurfaceRefinement refined = refine(options_.surface);
+  const double w = options_.surface_disagreement_weight;
+  if (options_.surface_refinement != 3 && refined.ok) {
+    const double offset = options_.surface_refinement == 2
+                              ? result->disparity_px - result->surface_disparity_px
+                              : 0.0;
+    const double d = refined.disparity_px + offset;
+    if (d + geometry_.disparity_offset_px > 0.0) {
+      result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
+      const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
+                                       refined.sigma_px * refined.sigma_px +
+                                       w * w * result->surface_check_px * result->surface_check_px);
+      result->refined = true;
+      result->disparity_px = d;
+      result->disparity_sigma_px = sigma_d;
+      result->distance_m = geometry_.DepthFromDisparity(d);
+      result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
+      return;
+    }
   }
-  if (!refined.ok) return;
-  const double offset =
-      options_.surface_refinement == 2 ? result->disparity_px - result->surface_disparity_px : 0.0;
-  const double d = refined.disparity_px + offset;
-  if (!(d + geometry_.disparity_offset_px > 0.0)) return;
-  result->surface_check_px = check;
-  // Half the correction (refined minus matched surface disparity) joins the uncertainty: how much
-  // the two measurements of the same surface disagree, like the silhouette shift in RangeObstacle.
-  const double correction = 0.5 * check;
-  const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
-                                   refined.sigma_px * refined.sigma_px + correction * correction);
-  result->refined = true;
-  result->disparity_px = d;
+  // A check only: the distance stays the matched one. A correlation that is highest at an end of
+  // the search window (and high enough there to be a surface's) says the two differ by at least
+  // the window: that end is used. Where the clean pixels cannot be fitted (too few of them, or no
+  // correlation peak above the gate), all the surface's pixels still can be, as a check.
+  auto at_edge = [&](const SurfaceRefinement& f) {
+    return f.at_search_edge && f.ncc >= options_.surface.min_ncc;
+  };
+  if (!refined.ok && !at_edge(refined) &&
+      (options_.surface.gradient_ratio > 0 || options_.surface.interior_only)) {
+    SurfaceRefinementOptions all = options_.surface;
+    all.gradient_ratio = 0;
+    all.interior_only = false;
+    refined = refine(all);
+  }
+  const bool edge = at_edge(refined);
+  if (!refined.ok && !edge) return;
+  result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
+  const double sigma_d = std::hypot(result->disparity_sigma_px, w * result->surface_check_px);
   result->disparity_sigma_px = sigma_d;
-  result->distance_m = geometry_.DepthFromDisparity(d);
   result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
 }
 

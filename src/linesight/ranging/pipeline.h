@@ -57,21 +57,23 @@ struct RangingPipelineOptions {
   double model_relative_sigma = 0.006;
   // Measure each result's nearest surface a second time on the rectified images
   // (RefineSurfaceDisparity: one disparity for the surface pixels by NCC, nothing outside them):
-  // 0 = off; 1 = the refined surface disparity is the result; 2 = the refined surface disparity
-  // plus the matched map's offset of d_near above the surface's mean (in 1 and 2 the
-  // refinement's noise and half the refined - matched difference join sigma_d); 3 (default) = a
-  // check: the distance stays the matched one and surface_disagreement_weight * (refined - matched)
-  // joins sigma_d in quadrature. Why 3 and not 2: as a distance, the refined value fixes the
-  // insulator's thin rims at 1.5-3.5 m (+1.1..+1.7 % -> +0.1..+0.8 %, `eval ranging`, true
-  // calibration) but breaks others (the surface pixels picked from the matched map include the
-  // conductor entering a clamp: clamp at 3 m -1.5..-3.6 %; with the estimated calibration the
-  // insulator at 3-4 m reads 1.4-1.9 % too near). As a check it does what neither measurement alone
-  // can: where the two disagree, one of them is biased by about the difference, which is what sigma
-  // must then cover (`eval ranging`, 50 runs, estimated calibration: +-2 sigma coverage of the
-  // insulator at 2 / 2.5 m 14 / 56 % -> 100 / 98 %, 39 of 39 cells covered; on the damper and the
-  // clamp sigma grows by at most 1.13x).
-  int surface_refinement = 3;
-  double surface_disagreement_weight = 1.0;  // mode 3's weight, in [0, 4]
+  // 0 = off; 1 = the refined surface disparity is the result; 2 (default) = the refined surface
+  // disparity plus the matched map's offset of d_near above the surface's mean (the nearest-point
+  // definition kept); 3 = a check only: the distance stays the matched one. In every mode the
+  // disagreement, surface_disagreement_weight * (refined - matched), joins sigma_d in quadrature
+  // (where the two measurements of one surface disagree, one of them is off by about the
+  // difference), and in 1 and 2 the refinement's noise does too. Where the refinement cannot
+  // correct (too few clean pixels: see SurfaceRefinementOptions::gradient_ratio, interior_only) it
+  // is run again on every surface pixel as a check. (Mode 3 with surface.gradient_ratio = 0 and
+  // surface.interior_only = false is the default of sessions 9-10.)
+  // Why 2 is the default since session 11: the matcher flattens small fronts (the insulator's
+  // rims at 1-2.5 m read 0.5 px too far; `eval ranging`, 4 runs, 0.5-5 m, estimated calibration,
+  // cells off by > 1 %: 3 with mode 3, 1 with mode 2), and on `eval plates` the matched map's
+  // near percentile reads flat faces at 5 m 1-1.4 % too near (82 -> 90 of 90 cells within 1 %).
+  // Mode 2 was not the default before because it then used every surface pixel: the
+  // rims' horizontal edges turned the estimated calibration's vertical error into 1.8 % too near.
+  int surface_refinement = 2;
+  double surface_disagreement_weight = 1.0;  // in [0, 4]
   SurfaceRefinementOptions surface;
   RectifyOptions rectify;
   // Their min/max depth are overwritten by the depths of the searched disparity range (the working

@@ -21,6 +21,8 @@ void SurfaceRefinementOptions::Check() const {
   CheckOption(min_pixels >= 3, "SurfaceRefinementOptions.min_pixels", min_pixels, "must be >= 3");
   CheckOption(min_ncc >= -1.0 && min_ncc < 1.0, "SurfaceRefinementOptions.min_ncc", min_ncc,
               "must be in [-1, 1)");
+  CheckOption(gradient_ratio >= 0.0 && gradient_ratio <= 100.0,
+              "SurfaceRefinementOptions.gradient_ratio", gradient_ratio, "must be in [0, 100]");
 }
 
 namespace {
@@ -100,22 +102,50 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
     return out;
   }
   const cv::Mat l = ToGrayFloat(left.rowRange(y0, y1 + 1));
+  // Gradients of the left image (3x3 Sobel on the rows S covers, one row of context each side).
+  cv::Mat gx, gy;
+  int g0 = 0;
+  if (options.gradient_ratio > 0) {
+    g0 = std::max(0, y0 - 1);
+    const cv::Mat lg = ToGrayFloat(left.rowRange(g0, std::min(left.rows, y1 + 2)));
+    cv::Sobel(lg, gx, CV_32F, 1, 0, 3);
+    cv::Sobel(lg, gy, CV_32F, 0, 1, 3);
+  }
   const cv::Mat r = ToGrayFloat(right.rowRange(y0, y1 + 1));
   // Usable pixels: inside the image, and their match at every searched d inside the right image
   // with the interpolation taps.
+  cv::Mat in_s;
+  if (options.interior_only) {
+    in_s = cv::Mat::zeros(y1 - y0 + 3, left.cols + 2, CV_8U);  // one guard pixel each side
+    for (const cv::Point& p : pixels) {
+      if (p.x >= 0 && p.x < left.cols) in_s.at<uchar>(p.y - y0 + 1, p.x + 1) = 1;
+    }
+  }
+  auto interior = [&](const cv::Point& p) {
+    const int u = p.x + 1, v = p.y - y0 + 1;
+    return in_s.at<uchar>(v - 1, u) && in_s.at<uchar>(v + 1, u) && in_s.at<uchar>(v, u - 1) &&
+           in_s.at<uchar>(v, u + 1);
+  };
   std::vector<cv::Point> used;
   std::vector<double> lv;
   for (const cv::Point& p : pixels) {
     if (p.x < 0 || p.x >= left.cols || p.y < 0 || p.y >= left.rows) continue;
     if (p.x - d_max - 0.5 < 1.0 || p.x - d_min + 0.5 >= double(right.cols) - 2.0) continue;
+    if (options.interior_only && !interior(p)) continue;
+    if (options.gradient_ratio > 0 &&
+        std::abs(gy.at<float>(p.y - g0, p.x)) >
+            options.gradient_ratio * std::abs(gx.at<float>(p.y - g0, p.x))) {
+      continue;
+    }
     used.push_back({p.x, p.y - y0});
     lv.push_back(l.at<float>(p.y - y0, p.x));
   }
   out.pixels = int(used.size());
   if (out.pixels < options.min_pixels) {
-    out.reason =
-        fmt::format("only {} surface pixels can be matched inside the right image; need {}",
-                    out.pixels, options.min_pixels);
+    out.reason = fmt::format(
+        "only {} surface pixels are usable (match inside the right image, "
+        "gradient and interior selection); need {}",
+        out.pixels, options.min_pixels);
     return out;
   }
   std::vector<double> rv(used.size());

@@ -41,20 +41,91 @@ std::vector<cv::Point> MakePair(double patch_d, cv::Mat* left, cv::Mat* right) {
   return pixels;
 }
 
+// Every pixel of S, no gradient or interior selection.
+SurfaceRefinementOptions AllPixels() {
+  SurfaceRefinementOptions o;
+  o.gradient_ratio = 0.0;
+  o.interior_only = false;
+  return o;
+}
+
 TEST(SurfaceRefinementTest, RecoversTheDisparityOfAShiftedPatch) {
   for (double d : {12.3, 20.75}) {
-    cv::Mat left, right;
-    const std::vector<cv::Point> pixels = MakePair(d, &left, &right);
-    // Start 0.8 px off (the matcher's bias on thin fronts).
-    const SurfaceRefinement r =
-        RefineSurfaceDisparity(left, right, pixels, d - 0.8, SurfaceRefinementOptions());
-    ASSERT_TRUE(r.ok) << r.reason;
-    EXPECT_NEAR(r.disparity_px, d, 0.03);
-    EXPECT_GT(r.ncc, 0.99);
-    EXPECT_EQ(r.pixels, int(pixels.size()));
-    EXPECT_GT(r.sigma_px, 0.0);
-    EXPECT_LT(r.sigma_px, 0.02);
+    for (const SurfaceRefinementOptions& options : {SurfaceRefinementOptions(), AllPixels()}) {
+      cv::Mat left, right;
+      const std::vector<cv::Point> pixels = MakePair(d, &left, &right);
+      // Start 0.8 px off (the matcher's bias on thin fronts).
+      const SurfaceRefinement r = RefineSurfaceDisparity(left, right, pixels, d - 0.8, options);
+      ASSERT_TRUE(r.ok) << r.reason;
+      EXPECT_NEAR(r.disparity_px, d, 0.03);
+      EXPECT_GT(r.ncc, 0.99);
+      EXPECT_GT(r.sigma_px, 0.0);
+      EXPECT_LT(r.sigma_px, 0.02);
+      if (options.interior_only) {
+        // Interior of the 80 x 40 patch, and of those the pixels with a mostly horizontal gradient.
+        EXPECT_LT(r.pixels, 78 * 38);
+        EXPECT_GT(r.pixels, 78 * 38 / 5);
+      } else {
+        EXPECT_EQ(r.pixels, int(pixels.size()));
+      }
+    }
   }
+}
+
+// S's border is left out with interior_only: a ring of background pixels around the patch (what
+// a matcher's fattening adds to a surface set) no longer enters the fit.
+TEST(SurfaceRefinementTest, InteriorOnlyDropsTheBorderOfTheSet) {
+  cv::Mat left, right;
+  MakePair(12.3, &left, &right);
+  std::vector<cv::Point> pixels;  // the patch grown by 1 px: a ring of background
+  for (int y = 39; y < 81; ++y)
+    for (int x = 59; x < 141; ++x) pixels.push_back({x, y});
+  SurfaceRefinementOptions interior = AllPixels();
+  interior.interior_only = true;
+  const SurfaceRefinement r = RefineSurfaceDisparity(left, right, pixels, 12.0, interior);
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_EQ(r.pixels, 80 * 40);  // exactly the patch
+  EXPECT_NEAR(r.disparity_px, 12.3, 0.03);
+  // With the ring the fit mixes two surfaces: a lower correlation peak.
+  const SurfaceRefinement all = RefineSurfaceDisparity(left, right, pixels, 12.0, AllPixels());
+  EXPECT_EQ(all.pixels, int(pixels.size()));
+  EXPECT_LT(all.ncc, r.ncc);
+}
+
+// A vertical misalignment of the pair (an estimated calibration's rectification error) on a
+// texture of near-horizontal stripes: matched along the row, every stripe pixel reads
+// dy * (dI/dy) / (dI/dx) too far or near. Keeping only pixels whose gradient is mostly horizontal
+// leaves the vertical texture, which is unaffected.
+TEST(SurfaceRefinementTest, GradientRatioRemovesTheBiasOfAVerticalMisalignment) {
+  const double d = 14.2, dy = 0.15, slope = 0.12;  // stripes y = slope * x + c
+  auto texture = [&](double x, double y) {
+    return 128.0 + 60.0 * std::sin(2.0 * M_PI * (y - slope * x) / 9.0) + 6.0 * std::sin(0.9 * x) +
+           4.0 * std::sin(0.37 * x + 1.0);
+  };
+  cv::Mat left(120, 200, CV_32F), right(120, 200, CV_32F);
+  for (int y = 0; y < 120; ++y) {
+    for (int x = 0; x < 200; ++x) {
+      left.at<float>(y, x) = float(texture(x, y));
+      right.at<float>(y, x) = float(texture(x + d, y + dy));  // right sees the scene dy lower
+    }
+  }
+  cv::Mat left8, right8;
+  left.convertTo(left8, CV_8U);
+  right.convertTo(right8, CV_8U);
+  std::vector<cv::Point> pixels;
+  for (int y = 30; y < 90; ++y)
+    for (int x = 50; x < 150; ++x) pixels.push_back({x, y});
+  SurfaceRefinementOptions all = AllPixels();
+  all.min_ncc = 0.5;
+  SurfaceRefinementOptions aperture = all;
+  aperture.gradient_ratio = 1.0;
+  const SurfaceRefinement biased = RefineSurfaceDisparity(left8, right8, pixels, d, all);
+  const SurfaceRefinement clean = RefineSurfaceDisparity(left8, right8, pixels, d, aperture);
+  ASSERT_TRUE(clean.ok) << clean.reason;
+  ASSERT_TRUE(biased.ok || biased.at_search_edge) << biased.reason;
+  EXPECT_GT(std::abs(biased.disparity_px - d), 0.3);
+  EXPECT_LT(std::abs(clean.disparity_px - d), 0.5 * std::abs(biased.disparity_px - d));
+  EXPECT_LT(clean.pixels, biased.pixels);
 }
 
 TEST(SurfaceRefinementTest, BgrImagesGiveTheSameAnswer) {
@@ -97,7 +168,7 @@ TEST(SurfaceRefinementTest, RefusesWhatItCannotMeasure) {
   EXPECT_FALSE(RefineSurfaceDisparity(left, right, few, 12.0, SurfaceRefinementOptions()).ok);
   // Pixels whose match would leave the right image are not used.
   const std::vector<cv::Point> edge = {{2, 50}, {3, 50}, {4, 50}};
-  EXPECT_EQ(RefineSurfaceDisparity(left, right, edge, 12.0, SurfaceRefinementOptions()).pixels, 0);
+  EXPECT_EQ(RefineSurfaceDisparity(left, right, edge, 12.0, AllPixels()).pixels, 0);
 }
 
 TEST(SurfaceRefinementTest, BadInputAndOptions) {
@@ -113,6 +184,9 @@ TEST(SurfaceRefinementTest, BadInputAndOptions) {
   EXPECT_THROW(o.Check(), OptionError);
   o = SurfaceRefinementOptions();
   o.min_ncc = 1.0;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = SurfaceRefinementOptions();
+  o.gradient_ratio = -1.0;
   EXPECT_THROW(o.Check(), OptionError);
 }
 
