@@ -92,50 +92,44 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   // refines (NCC above the gate) and stays within 1.5 %; sigma grows by the refinement's terms.
   EXPECT_TRUE(r.refined);
   ASSERT_TRUE(std::isfinite(r.surface_check_px));
+  auto range_with = [&](const RangingPipelineOptions& changed) {
+    const RangingPipeline p(sim::MakeStereoCalibration(scene_options.rig), changed);
+    return p.RangeRois(frame, {roi}).front();
+  };
   RangingPipelineOptions unchecked = options;
   unchecked.surface_refinement = 0;
-  const RangingPipeline plain(sim::MakeStereoCalibration(scene_options.rig), unchecked);
-  const RangeResult r0 = plain.RangeRois(frame, {roi}).front();
+  const RangeResult r0 = range_with(unchecked);
   ASSERT_TRUE(r0.ok()) << r0.reason;
   EXPECT_FALSE(r0.refined);
   EXPECT_FALSE(std::isfinite(r0.surface_check_px));
   EXPECT_EQ(r.matched_disparity_px, r0.disparity_px);
   EXPECT_NEAR(r.disparity_px - r0.disparity_px, r.surface_check_px, 1e-9);
-  EXPECT_GE(
-      r.disparity_sigma_px + 1e-12,
-      std::hypot(r0.disparity_sigma_px, options.surface_disagreement_weight * r.surface_check_px));
+  const double w = options.surface_disagreement_weight;
+  EXPECT_GE(r.disparity_sigma_px + 1e-12,
+            std::hypot(r0.disparity_sigma_px, w * r.surface_check_px));
   EXPECT_GE(r.sigma_m, r0.sigma_m);
+  // A check only: the matched distance, the disagreement in sigma.
+  auto expect_check_only = [&](const RangeResult& c) {
+    ASSERT_TRUE(c.ok()) << c.reason;
+    EXPECT_FALSE(c.refined);
+    EXPECT_EQ(c.distance_m, r0.distance_m);
+    ASSERT_TRUE(std::isfinite(c.surface_check_px));
+    EXPECT_NEAR(c.disparity_sigma_px, std::hypot(r0.disparity_sigma_px, w * c.surface_check_px),
+                1e-12);
+    EXPECT_GE(c.sigma_m, r0.sigma_m);
+  };
 
-  // Too few clean pixels to correct (a gradient selection that keeps almost none): the distance
-  // stays the matched one and the fit on all the surface's pixels is a check in sigma.
+  // Too few clean pixels to correct (a gradient selection that keeps almost none): the fit on
+  // all the surface's pixels is a check.
   RangingPipelineOptions strict = options;
   strict.surface.gradient_ratio = 1e-3;
-  const RangingPipeline fallback(sim::MakeStereoCalibration(scene_options.rig), strict);
-  const RangeResult rf = fallback.RangeRois(frame, {roi}).front();
-  ASSERT_TRUE(rf.ok()) << rf.reason;
-  EXPECT_FALSE(rf.refined);
-  EXPECT_EQ(rf.distance_m, r0.distance_m);
-  ASSERT_TRUE(std::isfinite(rf.surface_check_px));
-  EXPECT_NEAR(
-      rf.disparity_sigma_px,
-      std::hypot(r0.disparity_sigma_px, strict.surface_disagreement_weight * rf.surface_check_px),
-      1e-12);
+  expect_check_only(range_with(strict));
 
-  // Mode 3 measures the surface a second time as a check only: the distance is the matched one,
-  // the disagreement joins sigma.
+  // Mode 3 measures the surface a second time as a check only, on the same clean pixels.
   RangingPipelineOptions checking = options;
   checking.surface_refinement = 3;
-  const RangingPipeline checker(sim::MakeStereoCalibration(scene_options.rig), checking);
-  const RangeResult rc = checker.RangeRois(frame, {roi}).front();
-  ASSERT_TRUE(rc.ok()) << rc.reason;
-  EXPECT_FALSE(rc.refined);
-  ASSERT_TRUE(std::isfinite(rc.surface_check_px));
-  EXPECT_EQ(rc.distance_m, r0.distance_m);
-  EXPECT_NEAR(
-      rc.disparity_sigma_px,
-      std::hypot(r0.disparity_sigma_px, checking.surface_disagreement_weight * rc.surface_check_px),
-      1e-12);
-  EXPECT_GE(rc.sigma_m, r0.sigma_m);
+  const RangeResult rc = range_with(checking);
+  expect_check_only(rc);
   // Both measure the same surface the same way.
   EXPECT_EQ(rc.surface_check_px, r.surface_check_px);
 }
