@@ -73,7 +73,8 @@ void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* opti
 void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
   app.add_option("--ranging", *raw,
                  "ranging setting key=value (repeatable): near_percentile, core_fraction, "
-                 "silhouette_margin_x_px, silhouette_margin_y_px, min_body_width_m, "
+                 "silhouette_margin_x_px, silhouette_margin_y_px, fill_rejected_holes (0|1), "
+                 "min_body_width_m, "
                  "min_body_width_px, smoothing_radius_px, checked (0|1), "
                  "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
                  "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
@@ -103,6 +104,8 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
       options.ranging.silhouette_margin_x_px = int(value);
     } else if (key == "silhouette_margin_y_px") {
       options.ranging.silhouette_margin_y_px = int(value);
+    } else if (key == "fill_rejected_holes") {
+      options.ranging.fill_rejected_holes = value != 0.0;
     } else if (key == "min_body_width_m") {
       options.ranging.min_body_width_m = value;
     } else if (key == "min_body_width_px") {

@@ -308,26 +308,11 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   // Stage 4: local median of the obstacle's disparities (only obstacle pixels vote). The noise
   // level comes from the residuals against a wider median (radius noise_radius), which also sees
   // correlated matching errors that a 3x3 neighbourhood would hide.
-  // Pixels away from the mode's silhouette (see RangingOptions::silhouette_margin_x_px).
-  // On a small obstacle the full margin may leave fewer than min_valid_pixels: the margin then
-  // shrinks one pixel at a time (both directions) until enough remain, so that the pixels nearest
-  // the silhouette -- the most fattened ones -- are still left out.
-  cv::Mat interior = obstacle;
-  for (int mx = options.silhouette_margin_x_px, my = options.silhouette_margin_y_px;
-       mx > 0 || my > 0; mx = std::max(0, mx - 1), my = std::max(0, my - 1)) {
-    cv::Mat eroded;  // a new buffer: eroding in place would shrink `obstacle` too
-    cv::erode(obstacle, eroded,
-              cv::getStructuringElement(cv::MORPH_RECT, {2 * mx + 1, 2 * my + 1}));
-    if (cv::countNonZero(eroded) >= options.min_valid_pixels) {
-      interior = eroded;
-      break;
-    }
-  }
   const int r = options.smoothing_radius_px;
   const int noise_radius = std::max(4, r);
-  std::vector<float> smoothed_values, all_smoothed_values, residuals, window;
-  std::vector<cv::Point> smoothed_points;  // image coordinates of smoothed_values
-  smoothed_values.reserve(size_t(m));
+  std::vector<float> all_smoothed_values, residuals, window;
+  std::vector<cv::Point> all_points;  // ROI coordinates of all_smoothed_values
+  all_smoothed_values.reserve(size_t(m));
   residuals.reserve(size_t(m));
   auto local_median = [&](int x, int y, int radius) {
     window.clear();
@@ -343,9 +328,79 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
       if (!obstacle.at<uchar>(y, x)) continue;
       residuals.push_back(view.at<float>(y, x) - local_median(x, y, noise_radius));
       all_smoothed_values.push_back(r == 0 ? view.at<float>(y, x) : local_median(x, y, r));
-      if (interior.at<uchar>(y, x)) {
-        smoothed_values.push_back(all_smoothed_values.back());
-        smoothed_points.push_back({roi.x + x, roi.y + y});
+      all_points.push_back({x, y});
+    }
+  }
+
+  // Pixels away from the mode's silhouette (see RangingOptions::silhouette_margin_x_px).
+  // On a small obstacle the full margin may leave fewer than min_valid_pixels: the margin then
+  // shrinks one pixel at a time (both directions) until enough remain, so that the pixels nearest
+  // the silhouette -- the most fattened ones -- are still left out.
+  auto interior_of = [&](const cv::Mat& shape) {
+    for (int mx = options.silhouette_margin_x_px, my = options.silhouette_margin_y_px;
+         mx > 0 || my > 0; mx = std::max(0, mx - 1), my = std::max(0, my - 1)) {
+      cv::Mat eroded;  // a new buffer: eroding in place would shrink `shape` too
+      cv::erode(shape, eroded, cv::getStructuringElement(cv::MORPH_RECT, {2 * mx + 1, 2 * my + 1}));
+      eroded &= obstacle;
+      if (cv::countNonZero(eroded) >= options.min_valid_pixels) return eroded;
+    }
+    return obstacle.clone();
+  };
+  const double p = options.near_percentile;
+  auto values_in = [&](const cv::Mat& selection, std::vector<cv::Point>* points) {
+    std::vector<float> selected;
+    for (size_t i = 0; i < all_points.size(); ++i) {
+      if (!selection.at<uchar>(all_points[i])) continue;
+      selected.push_back(all_smoothed_values[i]);
+      if (points) points->push_back(all_points[i] + roi.tl());
+    }
+    return selected;
+  };
+  cv::Mat interior = interior_of(obstacle);
+  std::vector<cv::Point> smoothed_points;  // image coordinates of smoothed_values
+  std::vector<float> smoothed_values = values_in(interior, &smoothed_points);
+  double d_near = Quantile(smoothed_values, p);
+  // Rejected pixels (no disparity: the matcher's checks failed) scattered over a thin surface --
+  // an insulator's 9 px rim at 1 m -- each cut a margin out of it and can remove the whole nearest
+  // surface from the percentile (`eval ranging`, insulator at 1 m: 3 of 8 runs 3 px too far). The
+  // margin is meant for depth edges, where a neighbour's disparity spreads over the obstacle, and
+  // a hole of rejected pixels enclosed by the obstacle is none. With such holes filled, the
+  // interior is taken instead when its near percentile lies beyond the surface band
+  // (surface_band_relative) in front of the first: only then was a surface lost, and otherwise the
+  // pixels next to failed matches, more often mixed ones, stay out.
+  if (options.fill_rejected_holes) {
+    cv::Mat outside = obstacle == 0;
+    cv::Mat labels;
+    const int count = cv::connectedComponents(outside, labels, 4, CV_32S);
+    std::vector<uchar> hole(size_t(count), 1);
+    hole[0] = 0;  // the obstacle
+    for (int y = 0; y < view.rows; ++y) {
+      const int* label = labels.ptr<int>(y);
+      const float* d = view.ptr<float>(y);
+      for (int x = 0; x < view.cols; ++x) {
+        // Not a hole: a component holding a disparity (another depth) or reaching the ROI's edge.
+        if (IsValidDisparity(d[x]) || x == 0 || y == 0 || x == view.cols - 1 ||
+            y == view.rows - 1) {
+          hole[size_t(label[x])] = 0;
+        }
+      }
+    }
+    if (std::count(hole.begin(), hole.end(), uchar(1)) > 0) {
+      cv::Mat filled = obstacle.clone();
+      for (int y = 0; y < view.rows; ++y) {
+        const int* label = labels.ptr<int>(y);
+        for (int x = 0; x < view.cols; ++x) {
+          if (hole[size_t(label[x])]) filled.at<uchar>(y, x) = 1;
+        }
+      }
+      cv::Mat filled_interior = interior_of(filled);
+      std::vector<cv::Point> filled_points;
+      std::vector<float> filled_values = values_in(filled_interior, &filled_points);
+      const double filled_near = Quantile(filled_values, p);
+      if (filled_near + offset > (1.0 + options.surface_band_relative) * (d_near + offset)) {
+        d_near = filled_near;
+        smoothed_values = std::move(filled_values);
+        smoothed_points = std::move(filled_points);
       }
     }
   }
@@ -354,8 +409,6 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   // standard error of the percentile (with correlated errors: never below one independent sample of
   // the tail), and the steepness of the tail (d at the percentile halfway to the maximum minus
   // d_near), which bounds how far the nearest visible point can lie beyond the percentile.
-  const double p = options.near_percentile;
-  const double d_near = Quantile(smoothed_values, p);
   const double d_tail = Quantile(smoothed_values, 0.5 * (1.0 + p));
   for (float& e : residuals) e = std::abs(e);
   const double sigma_residual = 1.4826 * Median(residuals);

@@ -73,6 +73,12 @@ struct RangingOptions {
   // fewer than min_valid_pixels remain. 0 disables.
   int silhouette_margin_x_px = 4;
   int silhouette_margin_y_px = 3;
+  // Holes of the obstacle's mode that hold no disparity at all (pixels the matcher's checks
+  // rejected) and that the mode encloses are not silhouette: with them filled, the margin leaves
+  // out fewer pixels. Used when that puts the near percentile more than surface_band_relative in
+  // front of the percentile without filling (a surface the holes' margins had removed), see
+  // RangeObstacle.
+  bool fill_rejected_holes = true;
   int smoothing_radius_px =
       2;  // median of the obstacle's disparities over (2r+1)^2 before the percentile
   // Percentile (0.5..1) of the smoothed disparities taken as the nearest surface. 0.99: with the

@@ -1,9 +1,11 @@
 #include "linesight/ranging/ranging.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
 
+#include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/ranging/ranging_test_util.h"
 
@@ -253,6 +255,53 @@ TEST(RangingTest, SilhouetteMarginShrinksOnSmallObstacles) {
   ASSERT_TRUE(r.ok()) << r.reason;
   EXPECT_EQ(r.obstacle_pixels, 120);
   EXPECT_NEAR(r.distance_m, 3.0, 1e-5);
+}
+
+// A thin near band on top of an obstacle, as an insulator's rim above its shed: 8 rows at the
+// nearest disparity, then the surface recedes 10 % over 20 rows and stays there. Pixels where
+// (x + 2y) % 5 == 0 in rows [holes_y0, holes_y1) are rejected (no disparity), as a matcher's
+// checks reject scattered pixels of a weakly textured rim.
+cv::Mat RimOverRamp(const StereoGeometry& g, int holes_y0, int holes_y1) {
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  const double front = g.DisparityFromDepth(3.0);
+  for (int y = 90; y < 140; ++y) {
+    const double recede = y < 98 ? 0.0 : 0.1 * std::min(1.0, (y - 97) / 20.0);
+    d.row(y).colRange(120, 180).setTo(float(front * (1.0 - recede)));
+    for (int x = 120; x < 180 && y >= holes_y0 && y < holes_y1; ++x) {
+      if ((x + 2 * y) % 5 == 0) d.at<float>(y, x) = kInvalidDisparity;
+    }
+  }
+  return d;
+}
+
+// Every rejected pixel would cut a 9x7 margin out of the rim and remove it from the percentile
+// (the distance then reads 2 % too far); the enclosed holes are filled, so the rim is kept.
+TEST(RangingTest, RejectedPixelsOnAThinFrontDoNotRemoveIt) {
+  const StereoGeometry g = TestGeometry();
+  const cv::Mat d = RimOverRamp(g, 90, 98);
+  const cv::Rect roi(100, 70, 100, 90);
+  const RangeResult filled = RangeObstacle(d, g, roi, {});
+  ASSERT_TRUE(filled.ok()) << filled.reason;
+  EXPECT_NEAR(filled.distance_m, 3.0, 1e-4);
+  const RangeResult unfilled = RangeObstacle(d, g, roi, {.fill_rejected_holes = false});
+  ASSERT_TRUE(unfilled.ok()) << unfilled.reason;
+  EXPECT_GT(unfilled.distance_m, 3.0 * 1.015);
+}
+
+// Holes that cost no surface (here on the receding part) leave the result exactly as without
+// filling: the filled interior is only taken when it shows a surface beyond the band.
+TEST(RangingTest, RejectedPixelsAwayFromTheFrontChangeNothing) {
+  const StereoGeometry g = TestGeometry();
+  const cv::Mat d = RimOverRamp(g, 110, 120);
+  const cv::Rect roi(100, 70, 100, 90);
+  const RangeResult filled = RangeObstacle(d, g, roi, {});
+  const RangeResult unfilled = RangeObstacle(d, g, roi, {.fill_rejected_holes = false});
+  ASSERT_TRUE(filled.ok()) << filled.reason;
+  ASSERT_TRUE(unfilled.ok()) << unfilled.reason;
+  EXPECT_NEAR(filled.distance_m, 3.0, 1e-4);
+  EXPECT_EQ(filled.distance_m, unfilled.distance_m);
+  EXPECT_EQ(filled.disparity_sigma_px, unfilled.disparity_sigma_px);
+  EXPECT_EQ(filled.surface_pixels, unfilled.surface_pixels);
 }
 
 }  // namespace
