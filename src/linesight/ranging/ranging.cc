@@ -347,18 +347,18 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
     return obstacle.clone();
   };
   const double p = options.near_percentile;
-  auto values_in = [&](const cv::Mat& selection, std::vector<cv::Point>* points) {
+  // The smoothed values of the pixels in `selection`, and their image coordinates.
+  auto values_in = [&](const cv::Mat& selection, std::vector<cv::Point>& points) {
     std::vector<float> selected;
     for (size_t i = 0; i < all_points.size(); ++i) {
       if (!selection.at<uchar>(all_points[i])) continue;
       selected.push_back(all_smoothed_values[i]);
-      if (points) points->push_back(all_points[i] + roi.tl());
+      points.push_back(all_points[i] + roi.tl());
     }
     return selected;
   };
-  cv::Mat interior = interior_of(obstacle);
   std::vector<cv::Point> smoothed_points;  // image coordinates of smoothed_values
-  std::vector<float> smoothed_values = values_in(interior, &smoothed_points);
+  std::vector<float> smoothed_values = values_in(interior_of(obstacle), smoothed_points);
   double d_near = Quantile(smoothed_values, p);
   // Rejected pixels (no disparity: the matcher's checks failed) scattered over a thin surface --
   // an insulator's 9 px rim at 1 m -- each cut a margin out of it and can remove the whole nearest
@@ -393,9 +393,8 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
           if (hole[size_t(label[x])]) filled.at<uchar>(y, x) = 1;
         }
       }
-      cv::Mat filled_interior = interior_of(filled);
       std::vector<cv::Point> filled_points;
-      std::vector<float> filled_values = values_in(filled_interior, &filled_points);
+      std::vector<float> filled_values = values_in(interior_of(filled), filled_points);
       const double filled_near = Quantile(filled_values, p);
       if (filled_near + offset > (1.0 + options.surface_band_relative) * (d_near + offset)) {
         d_near = filled_near;
