@@ -74,7 +74,7 @@ void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
   app.add_option("--ranging", *raw,
                  "ranging setting key=value (repeatable): near_percentile, core_fraction, "
                  "silhouette_margin_x_px, silhouette_margin_y_px, fill_rejected_holes (0|1), "
-                 "min_body_width_m, "
+                 "min_body_width_m, largest_mode_without_bodies (0|1), "
                  "min_body_width_px, smoothing_radius_px, checked (0|1), "
                  "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
                  "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
@@ -106,6 +106,8 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
       options.ranging.silhouette_margin_y_px = int(value);
     } else if (key == "fill_rejected_holes") {
       options.ranging.fill_rejected_holes = value != 0.0;
+    } else if (key == "largest_mode_without_bodies") {
+      options.ranging.largest_mode_without_bodies = value != 0.0;
     } else if (key == "min_body_width_m") {
       options.ranging.min_body_width_m = value;
     } else if (key == "min_body_width_px") {

@@ -377,7 +377,7 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
       Run("range" + pair_args +
           " --ranging surface_refinement=3 --ranging surface_gradient_ratio=0"
           " --ranging surface_interior=0 --ranging surface_min_ncc=0.9"
-          " --ranging fill_rejected_holes=0");
+          " --ranging fill_rejected_holes=0 --ranging largest_mode_without_bodies=0");
   EXPECT_EQ(old_default.exit_code, 0) << old_default.err;
   const RunResult pixels = Run("range" + pair_args + " --ranging surface_min_pixels=2.5");
   EXPECT_NE(pixels.exit_code, 0);

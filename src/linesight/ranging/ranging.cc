@@ -174,6 +174,7 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
                             100.0 * options.min_valid_fraction));
   }
 
+  bool only_thin = false;  // the thin-structure filter left too few pixels: all are used
   // Stage 1b: drop thin structures (a conductor passing in front of or behind the obstacle).
   if (options.min_body_width_m > 0.0) {
     ThinStructureOptions thin;
@@ -192,6 +193,8 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
     if (int(body_values.size()) >= options.min_valid_pixels) {
       valid &= body;
       values = std::move(body_values);
+    } else {
+      only_thin = true;
     }
   }
 
@@ -236,14 +239,20 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoGeometry& geomet
   const double peak = *std::max_element(smoothed.begin(), smoothed.end());
   const double level = options.mode_valley_fraction * peak;
   int mode_first = -1, mode_last = -1;
-  for (int i = int(smoothed.size()) - 2; i >= 1 && mode_first < 0; --i) {
+  // Without any body left (only_thin), the nearest mode is whatever thin piece lies nearest --
+  // typically the conductor running towards the camera into the obstacle; the obstacle is then
+  // the mode with the most support in the core (RangingOptions::largest_mode_without_bodies).
+  const bool largest = only_thin && options.largest_mode_without_bodies;
+  double best = 0.0;
+  for (int i = int(smoothed.size()) - 2; i >= 1 && (largest || mode_first < 0); --i) {
     if (smoothed[size_t(i)] <= level) continue;
     int j = i;
     double support = 0.0;
     while (j >= 1 && smoothed[size_t(j)] > level) support += support_histogram[size_t(j--)];
-    if (support >= options.mode_min_support * n_support) {
+    if (support >= options.mode_min_support * n_support && (!largest || support > best)) {
       mode_first = j + 1;
       mode_last = i;
+      best = support;
     }
     i = j;
   }

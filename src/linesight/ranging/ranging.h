@@ -61,6 +61,13 @@ struct RangingOptions {
   double mode_valley_fraction = 0.08;
   double mode_min_support =
       0.10;  // share of the valid pixels a mode needs to be taken as the obstacle
+  // When the thin-structure filter (min_body_width_m/px) leaves too few pixels and all are used,
+  // take the mode with the most support instead of the nearest one: an ROI around an obstacle on
+  // the line holds the conductor running towards the camera, nearer than the obstacle, and with
+  // no body to tell them apart the nearest-mode rule takes a piece of it (eval ranging --diagnose,
+  // clamp at 4 m: its 5-7 px saddle and frame bars are thin too; 2 of 8 runs took the conductor at
+  // 2.8-3.0 m). false = the nearest mode, as with bodies.
+  bool largest_mode_without_bodies = true;
   // Mode support is counted over the core of the ROI only: the ROI shrunk about its centre to this
   // fraction of its width and height. An occluder in front that only overlaps the ROI's margin
   // (a damper before the clamp behind it) then does not take the obstacle's place unless it

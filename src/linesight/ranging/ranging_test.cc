@@ -304,5 +304,29 @@ TEST(RangingTest, RejectedPixelsAwayFromTheFrontChangeNothing) {
   EXPECT_EQ(filled.surface_pixels, unfilled.surface_pixels);
 }
 
+// A clamp seen from 4 m is thin all over (5-6 px frame bars and saddle, below the 9 px body width)
+// and the conductor running into it is nearer (a piece at 2.9 m crossing the ROI's core). With no
+// body left, the nearest mode is the conductor piece; the mode with the most support is the clamp.
+TEST(RangingTest, WithoutBodiesTheLargestModeIsTheObstacle) {
+  const StereoGeometry g = TestGeometry();
+  cv::Mat d(240, 320, CV_32F, cv::Scalar(float(g.DisparityFromDepth(20.0))));
+  const float clamp = float(g.DisparityFromDepth(4.0));
+  d(cv::Rect(128, 88, 45, 6)).setTo(clamp);  // top bar
+  d(cv::Rect(128, 88, 5, 45)).setTo(clamp);  // side bars
+  d(cv::Rect(168, 88, 5, 45)).setTo(clamp);
+  d(cv::Rect(128, 127, 45, 6)).setTo(clamp);  // saddle
+  for (int y = 70; y < 126; ++y) {            // conductor piece, 6 px wide
+    const int x = 112 + int(std::lround(0.7 * (y - 70)));
+    d.row(y).colRange(x - 3, x + 3).setTo(float(g.DisparityFromDepth(2.9)));
+  }
+  const cv::Rect roi(110, 70, 80, 80);
+  const RangeResult largest = RangeObstacle(d, g, roi, {});
+  ASSERT_TRUE(largest.ok()) << largest.reason;
+  EXPECT_NEAR(largest.distance_m, 4.0, 1e-4);
+  const RangeResult nearest = RangeObstacle(d, g, roi, {.largest_mode_without_bodies = false});
+  ASSERT_TRUE(nearest.ok()) << nearest.reason;
+  EXPECT_NEAR(nearest.distance_m, 2.9, 1e-3);
+}
+
 }  // namespace
 }  // namespace linesight
