@@ -275,7 +275,7 @@ void PrintCalibrationOnlyError(const sim::PowerLineScene& scene,
   cv::undistortPoints(il, ul, uc.M1, uc.D1, uc.R1, uc.P1);
   cv::undistortPoints(ir, ur, uc.M2, uc.D2, uc.R2, uc.P2);
   const double dd = ul[0].x - ur[0].x;
-  const double zc = GeometryFromCalibration(uc).DepthFromDisparity(dd);
+  const double zc = pipeline.geometry().DepthFromDisparity(dd);
   std::fprintf(stderr,
                "  calibration only at the nearest pixel: d %.3f px -> %.4f m (%+.2f %%), "
                "vertical misalignment %+.3f px\n",
