@@ -10,6 +10,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -187,6 +188,12 @@ TEST_F(CliTest, UnknownMethodAndFlagAndParamAreUsageErrors) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("num_disparities = 0"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
+  // rectify's --alpha and --calib-out only mean something with --recompute.
+  for (const char* option : {"--alpha 0", "--calib-out c.yml"}) {
+    r = Run(std::string("rectify --calib c.yml --left l.png --right r.png --out o ") + option);
+    EXPECT_EQ(r.exit_code, 2) << option;
+    EXPECT_NE(r.err.find("requires --recompute"), std::string::npos) << r.err;
+  }
 }
 
 // A valid calibration (as `linesight render` writes it) and a valid 4x3 PFM, for the bad-input
@@ -369,6 +376,13 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
   ASSERT_EQ(off.exit_code, 0) << off.err;
   EXPECT_NE(Slurp(json_off).find("\"surface_check_px\": null"), std::string::npos)
       << Slurp(json_off);
+  // `--json -`: stdout is the report alone (one JSON document), the table goes to stderr.
+  const RunResult to_stdout = Run("range" + pair_args + " --json -");
+  ASSERT_EQ(to_stdout.exit_code, 0) << to_stdout.err;
+  nlohmann::json parsed;
+  ASSERT_NO_THROW(parsed = nlohmann::json::parse(to_stdout.out)) << to_stdout.out;
+  EXPECT_EQ(parsed["obstacles"].size(), 1u) << to_stdout.out;
+  EXPECT_NE(to_stdout.err.find("distance_m"), std::string::npos) << to_stdout.err;
   const RunResult fraction = Run("range" + pair_args + " --ranging surface_refinement=2.5");
   EXPECT_NE(fraction.exit_code, 0);
   EXPECT_NE(fraction.err.find("surface_refinement=2.5"), std::string::npos) << fraction.err;

@@ -48,12 +48,14 @@ int RunDemo(int argc, char** argv) {
     Stopwatch watch;
     std::fprintf(stderr, "linesight demo -> %s\n", out_dir.c_str());
     const DemoReport report = linesight::RunDemo(options, stderr);
-    std::cout << "\n" << report.Table() << std::flush;
+    // With the JSON report on stdout, the table goes to stderr so that stdout stays one JSON
+    // document.
+    (json_path == "-" ? std::cerr : std::cout) << "\n" << report.Table() << std::flush;
     std::fprintf(
         stderr,
         "\nwrote %s/{left,right,rectified_left_ranged,disparity}.png, disparity.pfm, cloud.ply, "
-        "stereo.yml, report.json, scene/, boards/ in %.1f s\n",
-        out_dir.c_str(), watch.ElapsedMs() / 1000);
+        "stereo.yml, report.json, scene/%s in %.1f s\n",
+        out_dir.c_str(), options.use_true_calibration ? "" : ", boards/", watch.ElapsedMs() / 1000);
     if (!json_path.empty()) WriteJson(json_path, report.json);
   });
 }

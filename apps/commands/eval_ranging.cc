@@ -370,9 +370,8 @@ std::vector<double> ParseDoubles(const std::string& text, const char* what) {
 int RunEvalRanging(int argc, char** argv) {
   CLI::App app{
       "Ranging accuracy study on rendered power-line scenes (true and estimated calibration) and "
-      "the "
-      "metric depth check on Middlebury 2014 Motorcycle.",
-      "ranging"};
+      "the metric depth check on Middlebury 2014 Motorcycle.",
+      "eval ranging"};
   std::string distances_text = "0.3,0.5,1.0,1.5,2.0,2.5,3.0,3.5,4.0,4.5,5.0,5.5,6.0";
   std::string types_text = "damper,clamp,insulator", calibrations_text = "true,estimated";
   std::string json_path, plot_path, markdown_path;
@@ -561,14 +560,17 @@ int RunEvalRanging(int argc, char** argv) {
                      c.calibration.c_str(), c.type.c_str(), c.truth_m, count, reason.c_str());
       }
     }
-    std::cout << table;
+    // With the JSON report on stdout, the human-readable output goes to stderr so that stdout
+    // stays one JSON document.
+    std::ostream& out = json_path == "-" ? std::cerr : std::cout;
+    out << table;
     std::fprintf(stderr, "%zu scenes in %.1f s\n", types.size() * distances.size() * size_t(runs),
                  watch.ElapsedMs() / 1000.0);
 
     if (!middlebury_dir.empty()) {
       const MiddleburyCheck check = RunMiddleburyCheck(middlebury_dir, options);
       if (check.ran) {
-        std::cout << fmt::format(
+        out << fmt::format(
             "\nMiddlebury 2014 Motorcycle (quarter), {}: depth Z = baseline*f/(d + doffs) from our "
             "disparity vs from "
             "the ground truth, non-occluded pixels: median relative error {:.2f} %, mean {:.2f} %, "
@@ -583,7 +585,7 @@ int RunEvalRanging(int argc, char** argv) {
                                            {"pixels", check.pixels},
                                            {"density", check.density}};
       } else {
-        std::cout << "\nMiddlebury check skipped: " << check.reason << "\n";
+        out << "\nMiddlebury check skipped: " << check.reason << "\n";
         report["middlebury_motorcycle"] = {{"skipped", check.reason}};
       }
     }

@@ -77,12 +77,15 @@ int RunRange(int argc, char** argv) {
 
     const DisparityRange range = pipeline.disparity_range();
     const DisparityRange searched = pipeline.search_range();
-    std::cout << fmt::format(
+    // With the JSON report on stdout, the table goes to stderr so that stdout stays one JSON
+    // document.
+    std::ostream& out = json_path == "-" ? std::cerr : std::cout;
+    out << fmt::format(
         "method {}, depths {}..{} m -> disparities {}..{} (searched {}..{}), {:.0f} ms\n",
         pipeline.method(), options.min_depth_m, options.max_depth_m, range.min_disparity,
         range.max_disparity(), searched.min_disparity, searched.max_disparity(), match_ms);
-    std::cout << fmt::format("{:>3}  {:>6}  {:<20} {:>10} {:>9} {:>7}  {}\n", "#", "source", "box",
-                             "distance_m", "sigma_m", "valid%", "note");
+    out << fmt::format("{:>3}  {:>6}  {:<20} {:>10} {:>9} {:>7}  {}\n", "#", "source", "box",
+                       "distance_m", "sigma_m", "valid%", "note");
     nlohmann::json report;
     report["calibration"] = calib_path;
     report["method"] = pipeline.method();
@@ -99,11 +102,11 @@ int RunRange(int argc, char** argv) {
       const cv::Rect b = r.ok() ? r.box : r.roi;
       const std::string box = fmt::format("{},{},{},{}", b.x, b.y, b.width, b.height);
       if (r.ok()) {
-        std::cout << fmt::format("{:>3}  {:>6}  {:<20} {:>10.3f} {:>9.3f} {:>7.1f}\n", i + 1,
-                                 source, box, r.distance_m, r.sigma_m, 100.0 * r.valid_fraction);
+        out << fmt::format("{:>3}  {:>6}  {:<20} {:>10.3f} {:>9.3f} {:>7.1f}\n", i + 1, source, box,
+                           r.distance_m, r.sigma_m, 100.0 * r.valid_fraction);
       } else {
-        std::cout << fmt::format("{:>3}  {:>6}  {:<20} {:>10} {:>9} {:>7.1f}  no measurement: {}\n",
-                                 i + 1, source, box, "-", "-", 100.0 * r.valid_fraction, r.reason);
+        out << fmt::format("{:>3}  {:>6}  {:<20} {:>10} {:>9} {:>7.1f}  no measurement: {}\n",
+                           i + 1, source, box, "-", "-", 100.0 * r.valid_fraction, r.reason);
       }
       nlohmann::json j = RangeResultToJson(r);
       j["source"] = source;

@@ -27,14 +27,17 @@ int RunRectify(int argc, char** argv) {
   app.add_option("--out", out_dir,
                  "output folder (created): left_rect.png, right_rect.png, epipolar.png")
       ->required();
-  app.add_flag("--recompute", options.recompute,
-               "recompute R1 R2 P1 P2 Q with cv::stereoRectify instead of using those in the file");
+  CLI::Option* recompute = app.add_flag(
+      "--recompute", options.recompute,
+      "recompute R1 R2 P1 P2 Q with cv::stereoRectify instead of using those in the file");
   app.add_option(
          "--alpha", options.alpha,
          "with --recompute: 0 = only valid pixels, 1 = all source pixels, -1 = OpenCV default")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(recompute);
   app.add_option("--calib-out", calib_out_path,
-                 "with --recompute: write the recomputed calibration here (YAML)");
+                 "with --recompute: write the recomputed calibration here (YAML)")
+      ->needs(recompute);
   return RunCommand(app, argc, argv, [&] {
     options.Check();
     const StereoCalibration calib = ReadStereoCalibration(calib_path);
