@@ -72,13 +72,15 @@ void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* opti
 
 void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
   app.add_option("--ranging", *raw,
-                 "ranging setting key=value (repeatable): near_percentile, core_fraction, "
+                 "ranging setting key=value (repeatable, or comma-separated): near_percentile, "
+                 "core_fraction, "
                  "silhouette_margin_x_px, silhouette_margin_y_px, fill_rejected_holes (0|1), "
                  "min_body_width_m, largest_mode_without_bodies (0|1), "
                  "min_body_width_px, smoothing_radius_px, checked (0|1), "
                  "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
                  "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
-                 "surface_min_ncc, surface_min_pixels, surface_interior (0|1)");
+                 "surface_min_ncc, surface_min_pixels, surface_interior (0|1)")
+      ->delimiter(',');
 }
 
 void ApplyRangingSettings(const std::vector<std::string>& settings,

@@ -393,6 +393,15 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
           " --ranging surface_interior=0 --ranging surface_min_ncc=0.9"
           " --ranging fill_rejected_holes=0 --ranging largest_mode_without_bodies=0");
   EXPECT_EQ(old_default.exit_code, 0) << old_default.err;
+  // Comma-separated, as --param: the same settings in one option give the same report.
+  const RunResult joined = Run("range" + pair_args +
+                               " --ranging surface_refinement=3,surface_gradient_ratio=0"
+                               " --ranging surface_interior=0,surface_min_ncc=0.9"
+                               " --ranging fill_rejected_holes=0,largest_mode_without_bodies=0");
+  EXPECT_EQ(joined.exit_code, 0) << joined.err;
+  // The first line holds the matching time; the table below it must be identical.
+  auto table = [](const std::string& out) { return out.substr(out.find('\n') + 1); };
+  EXPECT_EQ(table(joined.out), table(old_default.out));
   const RunResult pixels = Run("range" + pair_args + " --ranging surface_min_pixels=2.5");
   EXPECT_NE(pixels.exit_code, 0);
   EXPECT_NE(pixels.err.find("surface_min_pixels=2.5"), std::string::npos) << pixels.err;
