@@ -42,6 +42,12 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
 // `serve` and `acquire`.
 void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options);
 
+// Where a command prints its human-readable table: stdout, or stderr when the JSON report goes to
+// stdout (`--json -`), so that stdout then holds one JSON document.
+inline std::ostream& TableStream(const std::string& json_path) {
+  return json_path == "-" ? std::cerr : std::cout;
+}
+
 // Shows a study's report: markdown on stdout (unless the JSON goes to stdout), and the markdown,
 // JSON and plot files that were asked for. Report needs ToMarkdown(), ToJson() and WritePlots(dir).
 template <typename Report>

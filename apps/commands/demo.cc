@@ -48,9 +48,7 @@ int RunDemo(int argc, char** argv) {
     Stopwatch watch;
     std::fprintf(stderr, "linesight demo -> %s\n", out_dir.c_str());
     const DemoReport report = linesight::RunDemo(options, stderr);
-    // With the JSON report on stdout, the table goes to stderr so that stdout stays one JSON
-    // document.
-    (json_path == "-" ? std::cerr : std::cout) << "\n" << report.Table() << std::flush;
+    TableStream(json_path) << "\n" << report.Table() << std::flush;
     std::fprintf(
         stderr,
         "\nwrote %s/{left,right,rectified_left_ranged,disparity}.png, disparity.pfm, cloud.ply, "

@@ -560,9 +560,7 @@ int RunEvalRanging(int argc, char** argv) {
                      c.calibration.c_str(), c.type.c_str(), c.truth_m, count, reason.c_str());
       }
     }
-    // With the JSON report on stdout, the human-readable output goes to stderr so that stdout
-    // stays one JSON document.
-    std::ostream& out = json_path == "-" ? std::cerr : std::cout;
+    std::ostream& out = TableStream(json_path);
     out << table;
     std::fprintf(stderr, "%zu scenes in %.1f s\n", types.size() * distances.size() * size_t(runs),
                  watch.ElapsedMs() / 1000.0);

@@ -77,9 +77,7 @@ int RunRange(int argc, char** argv) {
 
     const DisparityRange range = pipeline.disparity_range();
     const DisparityRange searched = pipeline.search_range();
-    // With the JSON report on stdout, the table goes to stderr so that stdout stays one JSON
-    // document.
-    std::ostream& out = json_path == "-" ? std::cerr : std::cout;
+    std::ostream& out = TableStream(json_path);
     out << fmt::format(
         "method {}, depths {}..{} m -> disparities {}..{} (searched {}..{}), {:.0f} ms\n",
         pipeline.method(), options.min_depth_m, options.max_depth_m, range.min_disparity,
