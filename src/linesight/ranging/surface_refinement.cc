@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <optional>
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
@@ -23,6 +25,27 @@ void SurfaceRefinementOptions::Check() const {
               "must be in [-1, 1)");
   CheckOption(gradient_ratio >= 0.0 && gradient_ratio <= 100.0,
               "SurfaceRefinementOptions.gradient_ratio", gradient_ratio, "must be in [0, 100]");
+}
+
+void EdgeDisparityOptions::Check() const {
+  CheckOption(reach_px >= 1 && reach_px <= 32, "EdgeDisparityOptions.reach_px", reach_px,
+              "must be in [1, 32]");
+  CheckOption(inward_px >= 0 && inward_px <= 32, "EdgeDisparityOptions.inward_px", inward_px,
+              "must be in [0, 32]");
+  CheckOption(row_extension_px >= 0 && row_extension_px <= 32,
+              "EdgeDisparityOptions.row_extension_px", row_extension_px, "must be in [0, 32]");
+  CheckOption(right_search_px >= 1 && right_search_px <= 16, "EdgeDisparityOptions.right_search_px",
+              right_search_px, "must be in [1, 16]");
+  CheckOption(min_contrast > 0.0, "EdgeDisparityOptions.min_contrast", min_contrast, "must be > 0");
+  CheckOption(plateau_tolerance > 0.0 && plateau_tolerance <= 1.0,
+              "EdgeDisparityOptions.plateau_tolerance", plateau_tolerance, "must be in (0, 1]");
+  CheckOption(level_tolerance > 0.0 && level_tolerance <= 1.0,
+              "EdgeDisparityOptions.level_tolerance", level_tolerance, "must be in (0, 1]");
+  CheckOption(gate_px >= 0.0, "EdgeDisparityOptions.gate_px", gate_px, "must be >= 0");
+  CheckOption(gate_relative >= 0.0 && gate_relative <= 0.5, "EdgeDisparityOptions.gate_relative",
+              gate_relative, "must be in [0, 0.5]");
+  CheckOption(max_slope > 0.0, "EdgeDisparityOptions.max_slope", max_slope, "must be > 0");
+  CheckOption(min_rows >= 1, "EdgeDisparityOptions.min_rows", min_rows, "must be >= 1");
 }
 
 namespace {
@@ -205,6 +228,165 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
   const double sigma_e = std::sqrt(see / double(std::max<size_t>(1, used.size() - 2)));
   out.sigma_px = sgg > 0 ? sigma_e / std::sqrt(sgg) : std::numeric_limits<double>::infinity();
   out.ok = true;
+  return out;
+}
+
+namespace {
+
+// One step in a row profile: the transition between pixels a and b (a < b), whose ends are the
+// plateaus' last pixels.
+struct Step {
+  double edge = 0;          // subpixel position of the step (coverage)
+  double inside_level = 0;  // the level on the surface's side
+  double contrast = 0;      // |B - A|
+  int sign = 0;             // sign of B - A
+};
+
+// The strongest step between x and x + 1 for x in [lo, hi] (of sign `sign` unless 0), grown to its
+// monotone transition; nullopt unless it passes the contrast and plateau checks. The surface lies
+// on the step's right side if `inside_right`.
+std::optional<Step> FindStep(const float* p, int n, int lo, int hi, int sign, bool inside_right,
+                             const EdgeDisparityOptions& o) {
+  lo = std::max(lo, 1);
+  hi = std::min(hi, n - 3);
+  int k = -1;
+  double peak = 0;
+  for (int x = lo; x <= hi; ++x) {
+    const double diff = double(p[x + 1]) - double(p[x]);
+    const double strength = sign == 0 ? std::abs(diff) : sign * diff;
+    if (strength > peak) peak = strength, k = x;
+  }
+  if (k < 0) return std::nullopt;
+  const int s = p[k + 1] > p[k] ? 1 : -1;
+  const double t = std::max(3.0, 0.1 * peak);
+  int a = k, b = k + 1;
+  while (a >= 2 && s * (double(p[a]) - double(p[a - 1])) > t) --a;
+  while (b <= n - 3 && s * (double(p[b + 1]) - double(p[b])) > t) ++b;
+  constexpr int kMaxTransitionPx = 6;
+  if (b - a > kMaxTransitionPx) return std::nullopt;
+  const double level_a = p[a], level_b = p[b];
+  const double contrast = std::abs(level_b - level_a);
+  if (contrast < o.min_contrast) return std::nullopt;
+  if (std::abs(double(p[a - 1]) - level_a) > o.plateau_tolerance * contrast ||
+      std::abs(double(p[b + 1]) - level_b) > o.plateau_tolerance * contrast) {
+    return std::nullopt;
+  }
+  Step step;
+  step.edge = a + 0.5;
+  for (int x = a + 1; x < b; ++x) step.edge += (double(p[x]) - level_b) / (level_a - level_b);
+  step.inside_level = inside_right ? level_b : level_a;
+  step.contrast = contrast;
+  step.sign = s;
+  return step;
+}
+
+double Median(std::vector<double> v) {
+  const size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + long(m), v.end());
+  return v[m];
+}
+
+}  // namespace
+
+EdgeDisparity MeasureEdgeDisparity(const cv::Mat& left, const cv::Mat& right,
+                                   const std::vector<cv::Point>& pixels, double d0,
+                                   const EdgeDisparityOptions& options) {
+  options.Check();
+  if (left.empty() || right.empty()) throw InputError("edge disparity: empty image");
+  if (left.size() != right.size()) {
+    throw InputError(fmt::format("edge disparity: left {}x{} and right {}x{} differ", left.cols,
+                                 left.rows, right.cols, right.rows));
+  }
+  EdgeDisparity out;
+  // S's row ends.
+  std::map<int, std::pair<int, int>> ends;  // y -> (min x, max x)
+  for (const cv::Point& p : pixels) {
+    if (p.x < 0 || p.x >= left.cols || p.y < 0 || p.y >= left.rows) continue;
+    auto [it, inserted] = ends.try_emplace(p.y, p.x, p.x);
+    if (!inserted) {
+      it->second.first = std::min(it->second.first, p.x);
+      it->second.second = std::max(it->second.second, p.x);
+    }
+  }
+  if (ends.empty()) {
+    out.reason = "no surface pixels";
+    return out;
+  }
+  const int s0 = ends.begin()->first, s1 = ends.rbegin()->first;
+  const int y0 = std::max(0, s0 - options.row_extension_px);
+  const int y1 = std::min(left.rows - 1, s1 + options.row_extension_px);
+  const cv::Mat l = ToGrayFloat(left.rowRange(y0, y1 + 1));
+  const cv::Mat r = ToGrayFloat(right.rowRange(y0, y1 + 1));
+  const int n = left.cols;
+  const double gate = options.gate_px + options.gate_relative * std::abs(d0);
+  std::vector<EdgeDisparity> sides;
+  for (const int side : {-1, 1}) {
+    const bool inside_right = side < 0;  // S's left end: the surface lies right of the step
+    std::map<int, double> left_edges;    // y -> the left view's edge
+    std::map<int, double> row_disparity;
+    for (int y = y0; y <= y1; ++y) {
+      // S's row, or the nearest one of S for the rows beyond it (S can skip rows: the next one
+      // below).
+      const int ys = std::clamp(y, s0, s1);
+      const auto& [y_ref, xs] = *ends.lower_bound(ys);
+      const float* pl = l.ptr<float>(y - y0);
+      const float* pr = r.ptr<float>(y - y0);
+      const int end = side < 0 ? xs.first : xs.second;
+      const float surface_level = l.ptr<float>(y_ref - y0)[end];
+      // Steps between x and x + 1 with the surface pixel (x + 1 or x) within inward_px inside
+      // S's end and the outside pixel within reach_px outside it.
+      const int lo = side < 0 ? end - options.reach_px : end - options.inward_px;
+      const int hi = side < 0 ? end + options.inward_px - 1 : end + options.reach_px - 1;
+      const std::optional<Step> sl = FindStep(pl, n, lo, hi, 0, inside_right, options);
+      if (!sl) continue;
+      // The inside must be S's own surface: its level that of S's end pixel.
+      if (std::abs(sl->inside_level - surface_level) > options.level_tolerance * sl->contrast)
+        continue;
+      left_edges[y] = sl->edge;
+      const int c = int(std::floor(sl->edge - d0));
+      const std::optional<Step> sr =
+          FindStep(pr, n, c - options.right_search_px, c + options.right_search_px, sl->sign,
+                   inside_right, options);
+      if (!sr) continue;
+      if (std::abs(sr->inside_level - sl->inside_level) > options.level_tolerance * sl->contrast)
+        continue;
+      const double d = sl->edge - sr->edge;
+      if (std::abs(d - d0) > gate) continue;
+      row_disparity[y] = d;
+    }
+    // Nearly vertical edges only: a row needs a neighbouring row's edge within max_slope.
+    std::vector<double> ds;
+    for (const auto& [y, d] : row_disparity) {
+      const auto up = left_edges.find(y - 1), down = left_edges.find(y + 1);
+      double slope = std::numeric_limits<double>::infinity();
+      if (up != left_edges.end() && down != left_edges.end()) {
+        slope = std::abs(down->second - up->second) / 2.0;
+      } else if (up != left_edges.end()) {
+        slope = std::abs(left_edges[y] - up->second);
+      } else if (down != left_edges.end()) {
+        slope = std::abs(down->second - left_edges[y]);
+      }
+      if (slope <= options.max_slope) ds.push_back(d);
+    }
+    EdgeDisparity e;
+    e.side = side;
+    e.rows = int(ds.size());
+    if (e.rows < options.min_rows) continue;
+    e.disparity_px = Median(ds);
+    std::vector<double> dev(ds.size());
+    for (size_t i = 0; i < ds.size(); ++i) dev[i] = std::abs(ds[i] - e.disparity_px);
+    e.sigma_px = 1.4826 * Median(dev) / std::sqrt(double(ds.size()));
+    e.ok = true;
+    sides.push_back(e);
+  }
+  if (sides.empty()) {
+    out.reason = fmt::format("fewer than {} rows with a clean edge at either end of the surface",
+                             options.min_rows);
+    return out;
+  }
+  out = sides.front();
+  for (const EdgeDisparity& e : sides)
+    if (e.disparity_px > out.disparity_px) out = e;
   return out;
 }
 

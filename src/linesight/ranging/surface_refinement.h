@@ -68,4 +68,64 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
                                          const std::vector<cv::Point>& pixels, double d0,
                                          const SurfaceRefinementOptions& options);
 
+// Disparity of a front surface's silhouette edges, measured on each view separately.
+//
+// Why: a small front with no texture of its own (a damper's dark end cap, 10 px across at 4.5 m)
+// carries its disparity only in its outline. A window -- the matcher's or RefineSurfaceDisparity's
+// -- that holds the outline also holds background that the other view does not see (half
+// occlusion), and reads the front too far (`eval ranging --diagnose`: 0.2..0.5 px at the damper at
+// 4.5 m). Here each view's edge is located on its own, per row, by the coverage of the step
+// between the two plateaus beside it: with levels A (left plateau pixel a) and B (right plateau
+// pixel b) the edge lies at a + 1/2 + sum over a < x < b of (I(x) - B) / (A - B). That is exact
+// for an area-sampled step whatever the background's level in either view, and stays exact under
+// blur and under the rectification's bilinear resampling (a unit-gain filter keeps the step's
+// first moment), which is what biases a correlation's subpixel peak. The row's disparity is the
+// difference of the two views' edges.
+//
+// Which edges: per row of the surface set S (and row_extension_px rows beyond it), the strongest
+// step near S's left end (searched from `reach_px` outside to `inward_px` inside), and the same
+// for its right end. The step must be one
+// monotone transition of at least `min_contrast` between flat plateaus, with the same polarity
+// and the same inside (surface) level in both views, and nearly vertical (|dx/dy| of the edge over
+// neighbouring rows at most `max_slope`: a residual vertical misalignment dy of the rectification
+// shifts an oblique edge by dy * dx/dy). An end whose step fails any check (a surface edge against
+// an equally dark neighbour, a texture too busy for plateaus) gives nothing. Each side's result is
+// the median of its rows; the nearer side (larger disparity) is the surface's, as the
+// nearest-surface distance asks for.
+struct EdgeDisparityOptions {
+  int reach_px = 7;   // outwards from S's row end (the silhouette margin keeps S 4 px inside)
+  int inward_px = 1;  // inwards from S's row end
+  // Rows above and below S searched too (the silhouette margin keeps S 3 rows inside), with the
+  // ends and the surface level of S's nearest row.
+  int row_extension_px = 3;
+  int right_search_px = 3;     // search radius of the right view's edge around e_L - d0
+  double min_contrast = 16.0;  // grey levels between the two plateaus
+  // A plateau's neighbour differs from it by at most this fraction of the contrast.
+  double plateau_tolerance = 0.25;
+  // The two views' inside (surface) levels agree within this fraction of the contrast.
+  double level_tolerance = 0.25;
+  // A row's disparity lies within gate_px + gate_relative * d0 of d0 (the matched value).
+  double gate_px = 0.5;
+  double gate_relative = 0.03;
+  double max_slope = 1.0;
+  int min_rows = 4;  // per side
+
+  void Check() const;
+};
+
+struct EdgeDisparity {
+  bool ok = false;
+  std::string reason;       // why not (empty when ok)
+  double disparity_px = 0;  // the nearer side's median row disparity
+  double sigma_px = 0;      // its standard error (1.4826 MAD / sqrt(rows))
+  int rows = 0;             // rows of that side
+  int side = 0;             // -1 = S's left ends, +1 = right ends
+};
+
+// `left`, `right`: the rectified pair (8-bit grey or BGR); `pixels`: S; `d0`: the matched
+// disparity. Throws InputError for empty or mismatched images.
+EdgeDisparity MeasureEdgeDisparity(const cv::Mat& left, const cv::Mat& right,
+                                   const std::vector<cv::Point>& pixels, double d0,
+                                   const EdgeDisparityOptions& options);
+
 }  // namespace linesight

@@ -190,5 +190,92 @@ TEST(SurfaceRefinementTest, BadInputAndOptions) {
   EXPECT_THROW(o.Check(), OptionError);
 }
 
+// A textureless dark front (x in [fx0, fx1), rows 40..59, grey 75) at disparity d in front of a
+// slowly varying bright background at disparity 3, area-sampled exactly (each pixel's value mixes
+// the surfaces by their overlap with the pixel's extent) -- the damper's end cap in small. With
+// `body`, an equally dark surface 1.3 px farther adjoins the front's right side (the weight's body
+// beside the cap), so that edge has no contrast.
+struct EdgePair {
+  cv::Mat left, right;
+  std::vector<cv::Point> pixels;  // S: the front shrunk by 3 px (the silhouette margin)
+};
+EdgePair MakeEdgePair(double d, double fx0, double fx1, bool body) {
+  auto overlap = [](double x, double a, double b) {
+    return std::max(0.0, std::min(x + 0.5, b) - std::max(x - 0.5, a));
+  };
+  // shift: the right view sees the front `d` and the body `d - 1.3` further left.
+  auto render = [&](cv::Mat* image, double shift, double body_shift, double background_shift) {
+    *image = cv::Mat(100, 160, CV_8U);
+    for (int y = 0; y < 100; ++y) {
+      for (int x = 0; x < 160; ++x) {
+        const bool rows = y >= 40 && y < 60;
+        const double front = rows ? overlap(x, fx0 - shift, fx1 - shift) : 0.0;
+        const double dark = rows && body ? overlap(x, fx1 - body_shift, fx1 + 8 - body_shift) : 0.0;
+        const double cover = std::min(1.0, front + dark);  // the body lies behind the front
+        const double background = 150.0 + 25.0 * std::sin(0.04 * (x + background_shift) + 0.03 * y);
+        image->at<uchar>(y, x) = cv::saturate_cast<uchar>(cover * 75.0 + (1 - cover) * background);
+      }
+    }
+  };
+  EdgePair pair;
+  render(&pair.left, 0.0, 0.0, 0.0);
+  render(&pair.right, d, d - 1.3, 3.0);
+  for (int y = 43; y < 57; ++y)
+    for (int x = int(std::ceil(fx0)) + 3; x < int(fx1) - 3; ++x) pair.pixels.push_back({x, y});
+  return pair;
+}
+
+TEST(EdgeDisparityTest, RecoversATexturelessFrontFromItsOutline) {
+  for (double d : {12.3, 19.72, 25.05}) {
+    const EdgePair pair = MakeEdgePair(d, 80.35, 90.8, false);
+    // The correlation fit has nothing to fit inside the front.
+    EXPECT_FALSE(RefineSurfaceDisparity(pair.left, pair.right, pair.pixels, d - 0.4,
+                                        SurfaceRefinementOptions())
+                     .ok);
+    // Started 0.4 px off, as the matcher reads such a front.
+    const EdgeDisparity e =
+        MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 0.4, EdgeDisparityOptions());
+    ASSERT_TRUE(e.ok) << e.reason;
+    EXPECT_NEAR(e.disparity_px, d, 0.03) << d;  // 8-bit levels, a background slope of 1 DN/px
+    EXPECT_EQ(e.rows, 20);                      // S's 14 rows and the 3 beyond each end
+    EXPECT_LT(e.sigma_px, 0.01);
+  }
+}
+
+TEST(EdgeDisparityTest, AnEdgeWithoutContrastGivesNothing) {
+  const double d = 19.72;
+  const EdgePair pair = MakeEdgePair(d, 80.35, 90.8, true);
+  const EdgeDisparity e =
+      MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 0.4, EdgeDisparityOptions());
+  ASSERT_TRUE(e.ok) << e.reason;
+  EXPECT_EQ(e.side, -1);  // only the left edge, against the background
+  EXPECT_NEAR(e.disparity_px, d, 0.02);
+  // With the matched value far off (more than the gate), no row is accepted.
+  const EdgeDisparity off =
+      MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 2.5, EdgeDisparityOptions());
+  EXPECT_FALSE(off.ok);
+  EXPECT_FALSE(off.reason.empty());
+  // A uniform image has no edges.
+  const cv::Mat flat(100, 160, CV_8U, cv::Scalar(90));
+  EXPECT_FALSE(MeasureEdgeDisparity(flat, flat, pair.pixels, d, EdgeDisparityOptions()).ok);
+  EXPECT_FALSE(MeasureEdgeDisparity(flat, flat, {}, d, EdgeDisparityOptions()).ok);
+}
+
+TEST(EdgeDisparityTest, BadInputAndOptions) {
+  const EdgePair pair = MakeEdgePair(12.3, 80.35, 90.8, false);
+  EXPECT_THROW(MeasureEdgeDisparity(pair.left, pair.right.colRange(0, 100), pair.pixels, 12.0,
+                                    EdgeDisparityOptions()),
+               InputError);
+  EXPECT_THROW(
+      MeasureEdgeDisparity(cv::Mat(), pair.right, pair.pixels, 12.0, EdgeDisparityOptions()),
+      InputError);
+  EdgeDisparityOptions o;
+  o.min_rows = 0;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = EdgeDisparityOptions();
+  o.level_tolerance = 0.0;
+  EXPECT_THROW(o.Check(), OptionError);
+}
+
 }  // namespace
 }  // namespace linesight
