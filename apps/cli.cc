@@ -71,17 +71,32 @@ void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* opti
 }
 
 void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
-  app.add_option("--ranging", *raw,
-                 "ranging setting key=value (repeatable, or comma-separated): near_percentile, "
-                 "core_fraction, "
-                 "silhouette_margin_x_px, silhouette_margin_y_px, fill_rejected_holes (0|1), "
-                 "min_body_width_m, largest_mode_without_bodies (0|1), "
-                 "min_body_width_px, smoothing_radius_px, checked (0|1), "
-                 "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
-                 "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
-                 "surface_min_ncc, surface_min_pixels, surface_interior (0|1)")
+  app.add_option(
+         "--ranging", *raw,
+         "ranging setting key=value (repeatable, or comma-separated): near_percentile, "
+         "core_fraction, "
+         "silhouette_margin_x_px, silhouette_margin_y_px, fill_rejected_holes (0|1), "
+         "min_body_width_m, largest_mode_without_bodies (0|1), "
+         "min_body_width_px, smoothing_radius_px, checked (0|1), "
+         "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
+         "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
+         "surface_min_ncc, surface_min_pixels, surface_interior (0|1), edge_fallback (0|1), "
+         "edge_min_rows, edge_min_contrast, edge_row_extension, edge_max_slope")
       ->delimiter(',');
 }
+
+namespace {
+
+// `value` of `setting` as an int in [lo, hi]; a fraction or a value outside is a usage error.
+int WholeSetting(const std::string& setting, double value, int lo, int hi) {
+  if (value != std::floor(value) || value < lo || value > hi) {
+    throw UsageError(
+        fmt::format("--ranging '{}': expected a whole number {}..{}", setting, lo, hi));
+  }
+  return int(value);
+}
+
+}  // namespace
 
 void ApplyRangingSettings(const std::vector<std::string>& settings,
                           RangingPipelineOptions* options_out) {
@@ -103,9 +118,9 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
     } else if (key == "core_fraction") {
       options.ranging.core_fraction = value;
     } else if (key == "silhouette_margin_x_px") {
-      options.ranging.silhouette_margin_x_px = int(value);
+      options.ranging.silhouette_margin_x_px = WholeSetting(setting, value, 0, 1000000);
     } else if (key == "silhouette_margin_y_px") {
-      options.ranging.silhouette_margin_y_px = int(value);
+      options.ranging.silhouette_margin_y_px = WholeSetting(setting, value, 0, 1000000);
     } else if (key == "fill_rejected_holes") {
       options.ranging.fill_rejected_holes = value != 0.0;
     } else if (key == "largest_mode_without_bodies") {
@@ -115,16 +130,13 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
     } else if (key == "min_body_width_px") {
       options.ranging.min_body_width_px = value;
     } else if (key == "smoothing_radius_px") {
-      options.ranging.smoothing_radius_px = int(value);
+      options.ranging.smoothing_radius_px = WholeSetting(setting, value, 0, 1000000);
     } else if (key == "checked") {
       options.range_on_checked_disparity = value != 0.0;
     } else if (key == "model_relative_sigma") {
       options.model_relative_sigma = value;
     } else if (key == "surface_refinement") {
-      if (value != std::floor(value)) {
-        throw UsageError(fmt::format("--ranging '{}': expected a whole number 0..3", setting));
-      }
-      options.surface_refinement = int(value);
+      options.surface_refinement = WholeSetting(setting, value, 0, 3);
     } else if (key == "surface_disagreement_weight") {
       options.surface_disagreement_weight = value;
     } else if (key == "surface_gradient_ratio") {
@@ -132,15 +144,21 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
     } else if (key == "surface_interior") {
       options.surface.interior_only = value != 0.0;
     } else if (key == "surface_min_pixels") {
-      if (value != std::floor(value) || value < 3 || value > 1e6) {
-        throw UsageError(
-            fmt::format("--ranging '{}': expected a whole number 3..1000000", setting));
-      }
-      options.surface.min_pixels = int(value);
+      options.surface.min_pixels = WholeSetting(setting, value, 3, 1000000);
     } else if (key == "surface_min_ncc") {
       options.surface.min_ncc = value;
     } else if (key == "surface_band_relative") {
       options.ranging.surface_band_relative = value;
+    } else if (key == "edge_fallback") {
+      options.edge_fallback = value != 0.0;
+    } else if (key == "edge_min_rows") {
+      options.edges.min_rows = WholeSetting(setting, value, 1, 1000000);
+    } else if (key == "edge_row_extension") {
+      options.edges.row_extension_px = WholeSetting(setting, value, 0, 1000000);
+    } else if (key == "edge_max_slope") {
+      options.edges.max_slope = value;
+    } else if (key == "edge_min_contrast") {
+      options.edges.min_contrast = value;
     } else if (key == "search_from_zero") {
       options.search_from_zero = value != 0.0;
     } else {

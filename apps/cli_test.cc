@@ -365,6 +365,7 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
       << report;
   EXPECT_NEAR(std::stod(m[1].str()), truth, 0.01 * truth);
   EXPECT_NE(report.find("\"surface_check_px\""), std::string::npos) << report;
+  EXPECT_NE(report.find("\"refinement\""), std::string::npos) << report;
   // Ranging settings: the surface check off, and a mode that is not a whole number refused.
   const std::string pair_args = " --rectified --calib " + (pairs / "calib.yml").string() +
                                 " --left " + (pairs / "baboon_box_2.50m_left.png").string() +
@@ -405,6 +406,15 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
   const RunResult pixels = Run("range" + pair_args + " --ranging surface_min_pixels=2.5");
   EXPECT_NE(pixels.exit_code, 0);
   EXPECT_NE(pixels.err.find("surface_min_pixels=2.5"), std::string::npos) << pixels.err;
+  const RunResult rows = Run("range" + pair_args + " --ranging edge_min_rows=0.5");
+  EXPECT_NE(rows.exit_code, 0);
+  EXPECT_NE(rows.err.find("edge_min_rows=0.5"), std::string::npos) << rows.err;
+  const RunResult slope = Run("range" + pair_args + " --ranging edge_max_slope=-1");
+  EXPECT_NE(slope.exit_code, 0);
+  EXPECT_NE(slope.err.find("max_slope"), std::string::npos) << slope.err;
+  const RunResult margin = Run("range" + pair_args + " --ranging silhouette_margin_x_px=1e300");
+  EXPECT_NE(margin.exit_code, 0);
+  EXPECT_NE(margin.err.find("silhouette_margin_x_px=1e300"), std::string::npos) << margin.err;
   const RunResult ratio = Run("range" + pair_args + " --ranging surface_gradient_ratio=-1");
   EXPECT_NE(ratio.exit_code, 0);
   EXPECT_NE(ratio.err.find("gradient_ratio"), std::string::npos) << ratio.err;

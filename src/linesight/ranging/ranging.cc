@@ -477,6 +477,11 @@ nlohmann::json RangeResultToJson(const RangeResult& result) {
     j["median_distance_m"] = result.median_distance_m;
     j["surface_pixels"] = result.surface_pixels.size();
     j["refined"] = result.refined;
+    if (result.refinement.empty()) {
+      j["refinement"] = nullptr;
+    } else {
+      j["refinement"] = result.refinement;
+    }
     j["matched_disparity_px"] = result.matched_disparity_px;
     if (std::isfinite(result.surface_check_px)) {
       j["surface_check_px"] = result.surface_check_px;

@@ -127,6 +127,9 @@ struct RangeResult {
   // Set by RangingPipeline when the front surface was refined on the images
   // (RefineSurfaceDisparity): the disparity from the matched map alone, before the refinement.
   bool refined = false;
+  // How: "surface" (RefineSurfaceDisparity on the surface's clean pixels) or "edges"
+  // (MeasureEdgeDisparity on its silhouette edges); empty when not refined.
+  std::string refinement;
   double matched_disparity_px = 0.0;
   // Photometric surface disparity minus the matched surface mean (px) when RangingPipeline
   // measured the surface a second time (RangingPipelineOptions::surface_refinement 1..3), NaN
