@@ -91,6 +91,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   // By default the front surface is refined on the images: the damper's textured end cap
   // refines (NCC above the gate) and stays within 1.5 %; sigma grows by the refinement's terms.
   EXPECT_TRUE(r.refined);
+  EXPECT_EQ(r.refinement, "surface");
   ASSERT_TRUE(std::isfinite(r.surface_check_px));
   auto range_with = [&](const RangingPipelineOptions& changed) {
     const RangingPipeline p(sim::MakeStereoCalibration(scene_options.rig), changed);
@@ -101,6 +102,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   const RangeResult r0 = range_with(unchecked);
   ASSERT_TRUE(r0.ok()) << r0.reason;
   EXPECT_FALSE(r0.refined);
+  EXPECT_TRUE(r0.refinement.empty());
   EXPECT_FALSE(std::isfinite(r0.surface_check_px));
   EXPECT_EQ(r.matched_disparity_px, r0.disparity_px);
   EXPECT_NEAR(r.disparity_px - r0.disparity_px, r.surface_check_px, 1e-9);
@@ -123,6 +125,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   // all the surface's pixels is a check.
   RangingPipelineOptions strict = options;
   strict.surface.gradient_ratio = 1e-3;
+  strict.edge_fallback = false;
   expect_check_only(range_with(strict));
 
   // Mode 3 measures the surface a second time as a check only, on the same clean pixels.
@@ -161,6 +164,42 @@ TEST(RangingPipelineTest, RangesEveryObstacleTypeAt30Cm) {
     const double truth = scene.obstacles.front().distance_m;
     EXPECT_NEAR(r.distance_m, truth, 0.03 * truth);
   }
+}
+
+// The damper at 4.5 m: its end cap, the nearest surface, is a dark disc about 10 px across with no
+// texture of its own, so the surface refinement has no clean pixels to fit and the matched map
+// reads it too far. Its outline against the background, measured on each view, gives the
+// distance (one noise draw of the default scene, true calibration).
+TEST(RangingPipelineTest, ATexturelessFrontIsMeasuredAtItsOutline) {
+  sim::PowerLineSceneOptions scene_options;
+  scene_options.obstacles = {{sim::ObstacleType::kDamper, 4.5, 0}};
+  const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
+  ASSERT_EQ(scene.obstacles.size(), 1u);
+  const cv::Rect box = scene.obstacles.front().box;
+  const int grow_x = box.width * 15 / 100 + 6, grow_y = box.height * 15 / 100 + 6;
+  const cv::Rect roi =
+      cv::Rect(box.x - grow_x, box.y - grow_y, box.width + 2 * grow_x, box.height + 2 * grow_y) &
+      cv::Rect(0, 0, scene.left.cols, scene.left.rows);
+  RangingPipelineOptions options;
+  options.threads = 1;
+  const RangingPipeline pipeline(sim::MakeStereoCalibration(scene_options.rig), options);
+  const RangingFrame frame =
+      pipeline.Process(scene.left, scene.right, cv::Range(roi.y, roi.br().y));
+  const RangeResult r = pipeline.RangeRois(frame, {roi}).front();
+  ASSERT_TRUE(r.ok()) << r.reason;
+  EXPECT_EQ(r.refinement, "edges");
+  EXPECT_GT(r.disparity_px, r.matched_disparity_px);  // only ever nearer than the matched map
+  const double truth = scene.obstacles.front().distance_m;
+  EXPECT_NEAR(r.distance_m, truth, 0.01 * truth);
+  EXPECT_LE(std::abs(r.distance_m - truth), 2 * r.sigma_m);
+  // Without the edges: the matched map's distance, farther.
+  options.edge_fallback = false;
+  const RangingPipeline without(sim::MakeStereoCalibration(scene_options.rig), options);
+  const RangeResult m = without.RangeRois(frame, {roi}).front();
+  ASSERT_TRUE(m.ok()) << m.reason;
+  EXPECT_NE(m.refinement, "edges");
+  EXPECT_EQ(m.disparity_px, r.matched_disparity_px);
+  EXPECT_GT(m.distance_m, r.distance_m);
 }
 
 }  // namespace
