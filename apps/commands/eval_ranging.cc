@@ -329,21 +329,22 @@ void PrintDiagnosis(const std::string& type, const std::string& calibration, int
         int(gt_ref.ok), gt_ref.disparity_px, mean_true, true_d, gt_ref.sigma_px, gt_ref.ncc,
         gt_ref.pixels, gt_ref.reason.c_str());
   }
-  std::fprintf(stderr,
-               "diag %s %s run %d: truth %.4f m (d %.3f px) box %d,%d,%dx%d | measured %s %.4f m "
-               "(%+.2f %%) d %.3f sigma_d %.3f sigma %.4f px_obst %d | gt-est %s %.4f m (%+.2f %%) "
-               "d %.3f | front %d px, %zu matched, median err %+.3f px | refined %d (matched d "
-               "%.3f, surface %zu "
-               "px mean %.3f)\n",
-               calibration.c_str(), type.c_str(), run, obstacle.distance_m, true_d, obstacle.box.x,
-               obstacle.box.y, obstacle.box.width, obstacle.box.height, result.ok() ? "ok" : "--",
-               result.distance_m,
-               result.ok() ? 100.0 * (result.distance_m / obstacle.distance_m - 1.0) : 0.0,
-               result.disparity_px, result.disparity_sigma_px, result.sigma_m,
-               result.obstacle_pixels, gt.ok() ? "ok" : "--", gt.distance_m,
-               gt.ok() ? 100.0 * (gt.distance_m / obstacle.distance_m - 1.0) : 0.0, gt.disparity_px,
-               front, errors.size(), median_error, int(result.refined), result.matched_disparity_px,
-               result.surface_pixels.size(), result.surface_disparity_px);
+  std::fprintf(
+      stderr,
+      "diag %s %s run %d: truth %.4f m (d %.3f px) box %d,%d,%dx%d | measured %s %.4f m "
+      "(%+.2f %%) d %.3f sigma_d %.3f sigma %.4f px_obst %d | gt-est %s %.4f m (%+.2f %%) "
+      "d %.3f | front %d px, %zu matched, median err %+.3f px | refined %s (matched d "
+      "%.3f, surface %zu "
+      "px mean %.3f)\n",
+      calibration.c_str(), type.c_str(), run, obstacle.distance_m, true_d, obstacle.box.x,
+      obstacle.box.y, obstacle.box.width, obstacle.box.height, result.ok() ? "ok" : "--",
+      result.distance_m,
+      result.ok() ? 100.0 * (result.distance_m / obstacle.distance_m - 1.0) : 0.0,
+      result.disparity_px, result.disparity_sigma_px, result.sigma_m, result.obstacle_pixels,
+      gt.ok() ? "ok" : "--", gt.distance_m,
+      gt.ok() ? 100.0 * (gt.distance_m / obstacle.distance_m - 1.0) : 0.0, gt.disparity_px, front,
+      errors.size(), median_error, result.refinement.empty() ? "no" : result.refinement.c_str(),
+      result.matched_disparity_px, result.surface_pixels.size(), result.surface_disparity_px);
   if (!result.ok()) std::fprintf(stderr, "  reason: %s\n", result.reason.c_str());
   PrintCalibrationOnlyError(scene, obstacle, pipeline);
 }
