@@ -233,8 +233,7 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
 
 namespace {
 
-// One step in a row profile: the transition between pixels a and b (a < b), whose ends are the
-// plateaus' last pixels.
+// One step in a row profile: the transition between the plateau pixels a and b (a < b).
 struct Step {
   double edge = 0;          // subpixel position of the step (coverage)
   double inside_level = 0;  // the level on the surface's side
@@ -247,8 +246,8 @@ struct Step {
 // on the step's right side if `inside_right`.
 std::optional<Step> FindStep(const float* p, int n, int lo, int hi, int sign, bool inside_right,
                              const EdgeDisparityOptions& o) {
-  lo = std::max(lo, 1);
-  hi = std::min(hi, n - 3);
+  lo = std::max(lo, 2);
+  hi = std::min(hi, n - 4);
   int k = -1;
   double peak = 0;
   for (int x = lo; x <= hi; ++x) {
@@ -258,12 +257,16 @@ std::optional<Step> FindStep(const float* p, int n, int lo, int hi, int sign, bo
   }
   if (k < 0) return std::nullopt;
   const int s = p[k + 1] > p[k] ? 1 : -1;
+  // The transition: steps of the same sign above the noise. A pixel the edge barely covers
+  // differs from its plateau by less than that, so the plateau pixels are the next ones out: a
+  // pixel with coverage c left out would move the edge by c.
   const double t = std::max(3.0, 0.1 * peak);
-  int a = k, b = k + 1;
-  while (a >= 2 && s * (double(p[a]) - double(p[a - 1])) > t) --a;
-  while (b <= n - 3 && s * (double(p[b + 1]) - double(p[b])) > t) ++b;
+  int first = k, last = k + 1;
+  while (first >= 3 && s * (double(p[first]) - double(p[first - 1])) > t) --first;
+  while (last <= n - 4 && s * (double(p[last + 1]) - double(p[last])) > t) ++last;
   constexpr int kMaxTransitionPx = 6;
-  if (b - a > kMaxTransitionPx) return std::nullopt;
+  if (last - first > kMaxTransitionPx) return std::nullopt;
+  const int a = first - 1, b = last + 1;  // >= 1 and <= n - 2
   const double level_a = p[a], level_b = p[b];
   const double contrast = std::abs(level_b - level_a);
   if (contrast < o.min_contrast) return std::nullopt;
@@ -297,7 +300,14 @@ EdgeDisparity MeasureEdgeDisparity(const cv::Mat& left, const cv::Mat& right,
     throw InputError(fmt::format("edge disparity: left {}x{} and right {}x{} differ", left.cols,
                                  left.rows, right.cols, right.rows));
   }
+  if (left.depth() != CV_8U || right.depth() != CV_8U) {
+    throw InputError("edge disparity: expected 8-bit images (min_contrast is in grey levels)");
+  }
   EdgeDisparity out;
+  if (!std::isfinite(d0) || std::abs(d0) > double(left.cols)) {
+    out.reason = fmt::format("the matched disparity {} is not inside the image", d0);
+    return out;
+  }
   // S's row ends.
   std::map<int, std::pair<int, int>> ends;  // y -> (min x, max x)
   for (const cv::Point& p : pixels) {
@@ -359,34 +369,56 @@ EdgeDisparity MeasureEdgeDisparity(const cv::Mat& left, const cv::Mat& right,
     for (const auto& [y, d] : row_disparity) {
       const auto up = left_edges.find(y - 1), down = left_edges.find(y + 1);
       double slope = std::numeric_limits<double>::infinity();
-      if (up != left_edges.end() && down != left_edges.end()) {
-        slope = std::abs(down->second - up->second) / 2.0;
-      } else if (up != left_edges.end()) {
-        slope = std::abs(left_edges[y] - up->second);
-      } else if (down != left_edges.end()) {
-        slope = std::abs(down->second - left_edges[y]);
-      }
+      const double e = left_edges[y];
+      if (up != left_edges.end()) slope = std::abs(e - up->second);
+      if (down != left_edges.end()) slope = std::min(slope, std::abs(down->second - e));
       if (slope <= options.max_slope) ds.push_back(d);
     }
+    (side < 0 ? out.left_rows : out.right_rows) = int(ds.size());
+    if (int(ds.size()) < options.min_rows) continue;
     EdgeDisparity e;
     e.side = side;
     e.rows = int(ds.size());
-    if (e.rows < options.min_rows) continue;
     e.disparity_px = Median(ds);
     std::vector<double> dev(ds.size());
     for (size_t i = 0; i < ds.size(); ++i) dev[i] = std::abs(ds[i] - e.disparity_px);
-    e.sigma_px = 1.4826 * Median(dev) / std::sqrt(double(ds.size()));
+    // Standard error of a median: sqrt(pi / 2) times that of a mean, sigma from the MAD.
+    e.sigma_px = 1.2533 * 1.4826 * Median(dev) / std::sqrt(double(ds.size()));
     e.ok = true;
     sides.push_back(e);
   }
   if (sides.empty()) {
-    out.reason = fmt::format("fewer than {} rows with a clean edge at either end of the surface",
-                             options.min_rows);
+    out.reason = fmt::format(
+        "fewer than {} rows with a clean edge at either end of the surface ({} left, {} right)",
+        options.min_rows, out.left_rows, out.right_rows);
     return out;
   }
-  out = sides.front();
-  for (const EdgeDisparity& e : sides)
-    if (e.disparity_px > out.disparity_px) out = e;
+  const int left_rows = out.left_rows, right_rows = out.right_rows;
+  if (sides.size() == 1) {
+    out = sides.front();
+  } else {
+    // Both ends: where they agree (within twice their combined error, each at least
+    // kSidePrecisionPx: 8-bit levels and rows that share their plateaus), one surface -- their
+    // row-weighted mean; else the nearer end, as the nearest-surface distance asks for.
+    constexpr double kSidePrecisionPx = 0.05;
+    const EdgeDisparity &ends_l = sides[0], &ends_r = sides[1];
+    const double tolerance = 2.0 * std::hypot(std::max(ends_l.sigma_px, kSidePrecisionPx),
+                                              std::max(ends_r.sigma_px, kSidePrecisionPx));
+    if (std::abs(ends_l.disparity_px - ends_r.disparity_px) <= tolerance) {
+      const double rows = ends_l.rows + ends_r.rows;
+      out = ends_l;
+      out.side = 0;
+      out.rows = ends_l.rows + ends_r.rows;
+      out.disparity_px =
+          (ends_l.rows * ends_l.disparity_px + ends_r.rows * ends_r.disparity_px) / rows;
+      out.sigma_px =
+          std::hypot(ends_l.rows * ends_l.sigma_px, ends_r.rows * ends_r.sigma_px) / rows;
+    } else {
+      out = ends_l.disparity_px > ends_r.disparity_px ? ends_l : ends_r;
+    }
+  }
+  out.left_rows = left_rows;
+  out.right_rows = right_rows;
   return out;
 }
 

@@ -76,11 +76,12 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
 // occlusion), and reads the front too far (`eval ranging --diagnose`: 0.2..0.5 px at the damper at
 // 4.5 m). Here each view's edge is located on its own, per row, by the coverage of the step
 // between the two plateaus beside it: with levels A (left plateau pixel a) and B (right plateau
-// pixel b) the edge lies at a + 1/2 + sum over a < x < b of (I(x) - B) / (A - B). That is exact
-// for an area-sampled step whatever the background's level in either view, and stays exact under
-// blur and under the rectification's bilinear resampling (a unit-gain filter keeps the step's
-// first moment), which is what biases a correlation's subpixel peak. The row's disparity is the
-// difference of the two views' edges.
+// pixel b, one pixel beyond the last step above the noise on each side, so that a pixel the edge
+// barely covers is counted) the edge lies at a + 1/2 + sum over a < x < b of (I(x) - B) / (A - B).
+// That is exact for an area-sampled step whatever the background's level in either view, and stays
+// exact under blur and under the rectification's bilinear resampling (a unit-gain filter keeps the
+// step's first moment), which is what biases a correlation's subpixel peak. The row's disparity is
+// the difference of the two views' edges.
 //
 // Which edges: per row of the surface set S (and row_extension_px rows beyond it), the strongest
 // step near S's left end (searched from `reach_px` outside to `inward_px` inside), and the same
@@ -89,9 +90,9 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
 // and the same inside (surface) level in both views, and nearly vertical (|dx/dy| of the edge over
 // neighbouring rows at most `max_slope`: a residual vertical misalignment dy of the rectification
 // shifts an oblique edge by dy * dx/dy). An end whose step fails any check (a surface edge against
-// an equally dark neighbour, a texture too busy for plateaus) gives nothing. Each side's result is
-// the median of its rows; the nearer side (larger disparity) is the surface's, as the
-// nearest-surface distance asks for.
+// an equally dark neighbour, a texture too busy for plateaus) gives nothing. Each end's result is
+// the median of its rows; where both ends have one and they agree, their mean, else the nearer end
+// (larger disparity), as the nearest-surface distance asks for.
 struct EdgeDisparityOptions {
   int reach_px = 7;   // outwards from S's row end (the silhouette margin keeps S 4 px inside)
   int inward_px = 1;  // inwards from S's row end
@@ -115,15 +116,19 @@ struct EdgeDisparityOptions {
 
 struct EdgeDisparity {
   bool ok = false;
-  std::string reason;       // why not (empty when ok)
-  double disparity_px = 0;  // the nearer side's median row disparity
-  double sigma_px = 0;      // its standard error (1.4826 MAD / sqrt(rows))
-  int rows = 0;             // rows of that side
-  int side = 0;             // -1 = S's left ends, +1 = right ends
+  std::string reason;  // why not (empty when ok)
+  // The ends' median row disparity: their row-weighted mean where both ends have min_rows rows
+  // and agree, else the nearer end's.
+  double disparity_px = 0;
+  double sigma_px = 0;  // its standard error (median: 1.2533 * 1.4826 MAD / sqrt(rows))
+  int rows = 0;         // rows it rests on
+  int side = 0;         // -1 = S's left ends, +1 = right ends, 0 = both
+  int left_rows = 0, right_rows = 0;  // rows with a clean edge at each end
 };
 
 // `left`, `right`: the rectified pair (8-bit grey or BGR); `pixels`: S; `d0`: the matched
-// disparity. Throws InputError for empty or mismatched images.
+// disparity (not ok unless finite and within the image width). Throws InputError for empty,
+// mismatched or not 8-bit images.
 EdgeDisparity MeasureEdgeDisparity(const cv::Mat& left, const cv::Mat& right,
                                    const std::vector<cv::Point>& pixels, double d0,
                                    const EdgeDisparityOptions& options);

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
 
@@ -212,7 +213,7 @@ EdgePair MakeEdgePair(double d, double fx0, double fx1, bool body) {
         const double front = rows ? overlap(x, fx0 - shift, fx1 - shift) : 0.0;
         const double dark = rows && body ? overlap(x, fx1 - body_shift, fx1 + 8 - body_shift) : 0.0;
         const double cover = std::min(1.0, front + dark);  // the body lies behind the front
-        const double background = 150.0 + 25.0 * std::sin(0.04 * (x + background_shift) + 0.03 * y);
+        const double background = 150.0 + 25.0 * std::sin(0.02 * (x + background_shift) + 0.03 * y);
         image->at<uchar>(y, x) = cv::saturate_cast<uchar>(cover * 75.0 + (1 - cover) * background);
       }
     }
@@ -236,9 +237,24 @@ TEST(EdgeDisparityTest, RecoversATexturelessFrontFromItsOutline) {
     const EdgeDisparity e =
         MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 0.4, EdgeDisparityOptions());
     ASSERT_TRUE(e.ok) << e.reason;
-    EXPECT_NEAR(e.disparity_px, d, 0.03) << d;  // 8-bit levels, a background slope of 1 DN/px
-    EXPECT_EQ(e.rows, 20);                      // S's 14 rows and the 3 beyond each end
+    EXPECT_NEAR(e.disparity_px, d, 0.03) << d;  // 8-bit levels, a background slope of 0.5 DN/px
+    EXPECT_EQ(e.side, 0);                       // both ends, in agreement
+    EXPECT_EQ(e.rows, 40);                      // S's 14 rows and the 3 beyond, at each end
     EXPECT_LT(e.sigma_px, 0.01);
+  }
+}
+
+// Every subpixel phase of the edges in both views: a pixel the edge barely covers differs from its
+// plateau by less than the noise threshold, and must still count.
+TEST(EdgeDisparityTest, EverySubpixelPhaseIsMeasured) {
+  for (int k = 0; k < 20; ++k) {
+    const double fx0 = 80.0 + 0.05 * k, d = 19.72;
+    const EdgePair pair = MakeEdgePair(d, fx0, fx0 + 10.4, false);
+    const EdgeDisparity e =
+        MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 0.4, EdgeDisparityOptions());
+    ASSERT_TRUE(e.ok) << e.reason;
+    EXPECT_EQ(e.side, 0) << fx0;  // both ends, in agreement
+    EXPECT_NEAR(e.disparity_px, d, 0.03) << fx0;
   }
 }
 
@@ -249,12 +265,28 @@ TEST(EdgeDisparityTest, AnEdgeWithoutContrastGivesNothing) {
       MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 0.4, EdgeDisparityOptions());
   ASSERT_TRUE(e.ok) << e.reason;
   EXPECT_EQ(e.side, -1);  // only the left edge, against the background
-  EXPECT_NEAR(e.disparity_px, d, 0.02);
+  EXPECT_EQ(e.right_rows, 0);
+  EXPECT_EQ(e.left_rows, 20);
+  EXPECT_NEAR(e.disparity_px, d, 0.03);
   // With the matched value far off (more than the gate), no row is accepted.
   const EdgeDisparity off =
       MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, d - 2.5, EdgeDisparityOptions());
   EXPECT_FALSE(off.ok);
   EXPECT_FALSE(off.reason.empty());
+  // A matched disparity that is not a number, or not inside the image, gives nothing.
+  EXPECT_FALSE(
+      MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, std::nan(""), EdgeDisparityOptions())
+          .ok);
+  EXPECT_FALSE(
+      MeasureEdgeDisparity(pair.left, pair.right, pair.pixels, 1e300, EdgeDisparityOptions()).ok);
+  // BGR images give the same answer.
+  cv::Mat left_bgr, right_bgr;
+  cv::cvtColor(pair.left, left_bgr, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(pair.right, right_bgr, cv::COLOR_GRAY2BGR);
+  EXPECT_NEAR(
+      MeasureEdgeDisparity(left_bgr, right_bgr, pair.pixels, d - 0.4, EdgeDisparityOptions())
+          .disparity_px,
+      e.disparity_px, 1e-3);
   // A uniform image has no edges.
   const cv::Mat flat(100, 160, CV_8U, cv::Scalar(90));
   EXPECT_FALSE(MeasureEdgeDisparity(flat, flat, pair.pixels, d, EdgeDisparityOptions()).ok);
@@ -269,6 +301,11 @@ TEST(EdgeDisparityTest, BadInputAndOptions) {
   EXPECT_THROW(
       MeasureEdgeDisparity(cv::Mat(), pair.right, pair.pixels, 12.0, EdgeDisparityOptions()),
       InputError);
+  cv::Mat left16, right16;
+  pair.left.convertTo(left16, CV_16U);
+  pair.right.convertTo(right16, CV_16U);
+  EXPECT_THROW(MeasureEdgeDisparity(left16, right16, pair.pixels, 12.0, EdgeDisparityOptions()),
+               InputError);
   EdgeDisparityOptions o;
   o.min_rows = 0;
   EXPECT_THROW(o.Check(), OptionError);
