@@ -154,7 +154,7 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
     } else if (key == "edge_min_rows") {
       options.edges.min_rows = WholeSetting(setting, value, 1, 1000000);
     } else if (key == "edge_row_extension") {
-      options.edges.row_extension_px = WholeSetting(setting, value, 0, 1000000);
+      options.edges.row_extension_px = WholeSetting(setting, value, 0, 32);
     } else if (key == "edge_max_slope") {
       options.edges.max_slope = value;
     } else if (key == "edge_min_contrast") {

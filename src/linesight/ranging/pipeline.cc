@@ -200,9 +200,11 @@ void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* resu
                              result->disparity_px, options_.edges);
     if (edges.ok && edges.disparity_px > result->disparity_px &&
         edges.disparity_px + geometry_.disparity_offset_px > 0.0) {
-      result->surface_check_px = edges.disparity_px - result->surface_disparity_px;
+      // The edges and d_near measure the same point: their difference is the disagreement.
+      result->surface_check_px = edges.disparity_px - result->disparity_px;
+      const double edge_sigma = std::max(edges.sigma_px, options_.ranging.disparity_sigma_floor_px);
       const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
-                                       edges.sigma_px * edges.sigma_px +
+                                       edge_sigma * edge_sigma +
                                        w * w * result->surface_check_px * result->surface_check_px);
       result->refined = true;
       result->refinement = "edges";
