@@ -148,11 +148,7 @@ TEST(RangingPipelineTest, RangesEveryObstacleTypeAt30Cm) {
     scene_options.obstacles = {{type, 0.3, 0}};
     const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
     ASSERT_EQ(scene.obstacles.size(), 1u);
-    const cv::Rect box = scene.obstacles.front().box;
-    const int grow_x = box.width * 15 / 100 + 6, grow_y = box.height * 15 / 100 + 6;
-    const cv::Rect roi =
-        cv::Rect(box.x - grow_x, box.y - grow_y, box.width + 2 * grow_x, box.height + 2 * grow_y) &
-        cv::Rect(0, 0, scene.left.cols, scene.left.rows);
+    const cv::Rect roi = GrowRoi(scene.obstacles.front().box, scene.left.size());
     RangingPipelineOptions options;
     options.method = "isgm";
     options.threads = 1;
@@ -175,11 +171,7 @@ TEST(RangingPipelineTest, ATexturelessFrontIsMeasuredAtItsOutline) {
   scene_options.obstacles = {{sim::ObstacleType::kDamper, 4.5, 0}};
   const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
   ASSERT_EQ(scene.obstacles.size(), 1u);
-  const cv::Rect box = scene.obstacles.front().box;
-  const int grow_x = box.width * 15 / 100 + 6, grow_y = box.height * 15 / 100 + 6;
-  const cv::Rect roi =
-      cv::Rect(box.x - grow_x, box.y - grow_y, box.width + 2 * grow_x, box.height + 2 * grow_y) &
-      cv::Rect(0, 0, scene.left.cols, scene.left.rows);
+  const cv::Rect roi = GrowRoi(scene.obstacles.front().box, scene.left.size());
   RangingPipelineOptions options;
   options.threads = 1;
   const RangingPipeline pipeline(sim::MakeStereoCalibration(scene_options.rig), options);

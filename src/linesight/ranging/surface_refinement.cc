@@ -65,6 +65,15 @@ cv::Mat ToGrayFloat(const cv::Mat& image) {
   return out;
 }
 
+// Throws InputError unless the pair is non-empty and of one size.
+void CheckPair(const cv::Mat& left, const cv::Mat& right, const char* what) {
+  if (left.empty() || right.empty()) throw InputError(fmt::format("{}: empty image", what));
+  if (left.size() != right.size()) {
+    throw InputError(fmt::format("{}: left {}x{} and right {}x{} differ", what, left.cols,
+                                 left.rows, right.cols, right.rows));
+  }
+}
+
 // Keys cubic convolution (a = -0.5) weights for the taps at -1, 0, 1, 2 around t in [0, 1).
 void CubicWeights(double t, double w[4]) {
   const double a = -0.5;
@@ -108,11 +117,7 @@ SurfaceRefinement RefineSurfaceDisparity(const cv::Mat& left, const cv::Mat& rig
                                          const std::vector<cv::Point>& pixels, double d0,
                                          const SurfaceRefinementOptions& options) {
   options.Check();
-  if (left.empty() || right.empty()) throw InputError("surface refinement: empty image");
-  if (left.size() != right.size()) {
-    throw InputError(fmt::format("surface refinement: left {}x{} and right {}x{} differ", left.cols,
-                                 left.rows, right.cols, right.rows));
-  }
+  CheckPair(left, right, "surface refinement");
   SurfaceRefinement out;
   const double w = options.search_px + options.search_relative * std::abs(d0);
   const int steps = int(std::ceil(w / options.step_px));
@@ -295,11 +300,7 @@ EdgeDisparity MeasureEdgeDisparity(const cv::Mat& left, const cv::Mat& right,
                                    const std::vector<cv::Point>& pixels, double d0,
                                    const EdgeDisparityOptions& options) {
   options.Check();
-  if (left.empty() || right.empty()) throw InputError("edge disparity: empty image");
-  if (left.size() != right.size()) {
-    throw InputError(fmt::format("edge disparity: left {}x{} and right {}x{} differ", left.cols,
-                                 left.rows, right.cols, right.rows));
-  }
+  CheckPair(left, right, "edge disparity");
   if (left.depth() != CV_8U || right.depth() != CV_8U) {
     throw InputError("edge disparity: expected 8-bit images (min_contrast is in grey levels)");
   }
