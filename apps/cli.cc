@@ -81,7 +81,8 @@ void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw) {
          "model_relative_sigma, search_from_zero (0|1), surface_refinement (0|1|2|3), "
          "surface_disagreement_weight, surface_band_relative, surface_gradient_ratio, "
          "surface_min_ncc, surface_min_pixels, surface_interior (0|1), edge_fallback (0|1), "
-         "edge_min_rows, edge_min_contrast, edge_row_extension, edge_max_slope")
+         "edge_min_rows, edge_min_contrast, edge_row_extension, edge_max_slope, "
+         "edge_surface_plateau")
       ->delimiter(',');
 }
 
@@ -155,6 +156,8 @@ void ApplyRangingSettings(const std::vector<std::string>& settings,
       options.edges.min_rows = WholeSetting(setting, value, 1, 1000000);
     } else if (key == "edge_row_extension") {
       options.edges.row_extension_px = WholeSetting(setting, value, 0, 32);
+    } else if (key == "edge_surface_plateau") {
+      options.edges.surface_plateau_px = WholeSetting(setting, value, 1, 16);
     } else if (key == "edge_max_slope") {
       options.edges.max_slope = value;
     } else if (key == "edge_min_contrast") {

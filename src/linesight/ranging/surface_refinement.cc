@@ -45,6 +45,8 @@ void EdgeDisparityOptions::Check() const {
   CheckOption(gate_relative >= 0.0 && gate_relative <= 0.5, "EdgeDisparityOptions.gate_relative",
               gate_relative, "must be in [0, 0.5]");
   CheckOption(max_slope > 0.0, "EdgeDisparityOptions.max_slope", max_slope, "must be > 0");
+  CheckOption(surface_plateau_px >= 1 && surface_plateau_px <= 16,
+              "EdgeDisparityOptions.surface_plateau_px", surface_plateau_px, "must be in [1, 16]");
   CheckOption(min_rows >= 1, "EdgeDisparityOptions.min_rows", min_rows, "must be >= 1");
 }
 
@@ -275,8 +277,19 @@ std::optional<Step> FindStep(const float* p, int n, int lo, int hi, int sign, bo
   const double level_a = p[a], level_b = p[b];
   const double contrast = std::abs(level_b - level_a);
   if (contrast < o.min_contrast) return std::nullopt;
-  if (std::abs(double(p[a - 1]) - level_a) > o.plateau_tolerance * contrast ||
-      std::abs(double(p[b + 1]) - level_b) > o.plateau_tolerance * contrast) {
+  // Flat plateaus: one pixel beyond on the outside, surface_plateau_px on the surface's side (the
+  // edges measure textureless fronts; a textured surface has no level to measure against).
+  auto flat = [&](int from, int step, int count, double level) {
+    for (int i = 1; i <= count; ++i) {
+      const int x = from + i * step;
+      if (x < 0 || x >= n) return false;
+      if (std::abs(double(p[x]) - level) > o.plateau_tolerance * contrast) return false;
+    }
+    return true;
+  };
+  const int inside_count = std::max(1, o.surface_plateau_px);
+  if (!flat(a, -1, inside_right ? 1 : inside_count, level_a) ||
+      !flat(b, 1, inside_right ? inside_count : 1, level_b)) {
     return std::nullopt;
   }
   Step step;

@@ -101,8 +101,10 @@ struct EdgeDisparityOptions {
   int row_extension_px = 3;
   int right_search_px = 3;     // search radius of the right view's edge around e_L - d0
   double min_contrast = 16.0;  // grey levels between the two plateaus
-  // A plateau's neighbour differs from it by at most this fraction of the contrast.
+  // A plateau's neighbours differ from it by at most this fraction of the contrast: one pixel on
+  // the outside, surface_plateau_px on the surface's side.
   double plateau_tolerance = 0.25;
+  int surface_plateau_px = 3;
   // The two views' inside (surface) levels agree within this fraction of the contrast.
   double level_tolerance = 0.25;
   // A row's disparity lies within gate_px + gate_relative * d0 of d0 (the matched value).

@@ -293,6 +293,41 @@ TEST(EdgeDisparityTest, AnEdgeWithoutContrastGivesNothing) {
   EXPECT_FALSE(MeasureEdgeDisparity(flat, flat, {}, d, EdgeDisparityOptions()).ok);
 }
 
+// A front with texture of its own (a bright column every 4 px, the first 3.65 px inside its left
+// edge) has no flat surface plateau beside its edges: with the default 3-pixel surface plateau
+// nothing is measured (the correlation fit is what measures a textured surface); a 1-pixel
+// plateau accepts the left edge.
+TEST(EdgeDisparityTest, ATexturedSurfaceHasNoPlateau) {
+  const int d = 19;
+  const double fx0 = 80.35, fx1 = 90.8;
+  auto render = [&](cv::Mat* image, int shift) {
+    *image = cv::Mat(100, 160, CV_8U);
+    for (int y = 0; y < 100; ++y) {
+      for (int x = 0; x < 160; ++x) {
+        const int u = x + shift;  // the left view's column this pixel sees
+        const double front = y >= 40 && y < 60
+                                 ? std::max(0.0, std::min(u + 0.5, fx1) - std::max(u - 0.5, fx0))
+                                 : 0.0;
+        const double level = (u - 81) % 4 == 3 ? 100.0 : 75.0;
+        image->at<uchar>(y, x) = cv::saturate_cast<uchar>(front * level + (1 - front) * 150.0);
+      }
+    }
+  };
+  cv::Mat left, right;
+  render(&left, 0);
+  render(&right, d);
+  std::vector<cv::Point> pixels;
+  for (int y = 43; y < 57; ++y)
+    for (int x = 85; x < 88; ++x) pixels.push_back({x, y});  // S's ends on the dark level
+  EXPECT_FALSE(MeasureEdgeDisparity(left, right, pixels, d - 0.4, EdgeDisparityOptions()).ok);
+  EdgeDisparityOptions one_pixel;
+  one_pixel.surface_plateau_px = 1;
+  const EdgeDisparity e = MeasureEdgeDisparity(left, right, pixels, d - 0.4, one_pixel);
+  ASSERT_TRUE(e.ok) << e.reason;
+  EXPECT_EQ(e.side, -1);
+  EXPECT_NEAR(e.disparity_px, d, 0.03);
+}
+
 TEST(EdgeDisparityTest, BadInputAndOptions) {
   const EdgePair pair = MakeEdgePair(12.3, 80.35, 90.8, false);
   EXPECT_THROW(MeasureEdgeDisparity(pair.left, pair.right.colRange(0, 100), pair.pixels, 12.0,
