@@ -167,22 +167,26 @@ void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* resu
   };
   SurfaceRefinement refined = refine(options_.surface);
   const double w = options_.surface_disagreement_weight;
+  // Takes disparity d from a second measurement (`kind`) with its own noise `sigma_px`; `check`,
+  // its disagreement with the matched map, joins sigma_d with weight w.
+  auto adopt = [&](double d, double check, double sigma_px, const char* kind) {
+    result->surface_check_px = check;
+    const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
+                                     sigma_px * sigma_px + w * w * check * check);
+    result->refined = true;
+    result->refinement = kind;
+    result->disparity_px = d;
+    result->disparity_sigma_px = sigma_d;
+    result->distance_m = geometry_.DepthFromDisparity(d);
+    result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
+  };
   if (options_.surface_refinement != 3 && refined.ok) {
     const double offset = options_.surface_refinement == 2
                               ? result->disparity_px - result->surface_disparity_px
                               : 0.0;
     const double d = refined.disparity_px + offset;
     if (d + geometry_.disparity_offset_px > 0.0) {
-      result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
-      const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
-                                       refined.sigma_px * refined.sigma_px +
-                                       w * w * result->surface_check_px * result->surface_check_px);
-      result->refined = true;
-      result->refinement = "surface";
-      result->disparity_px = d;
-      result->disparity_sigma_px = sigma_d;
-      result->distance_m = geometry_.DepthFromDisparity(d);
-      result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
+      adopt(d, refined.disparity_px - result->surface_disparity_px, refined.sigma_px, "surface");
       return;
     }
   }
@@ -201,17 +205,8 @@ void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* resu
     if (edges.ok && edges.disparity_px > result->disparity_px &&
         edges.disparity_px + geometry_.disparity_offset_px > 0.0) {
       // The edges and d_near measure the same point: their difference is the disagreement.
-      result->surface_check_px = edges.disparity_px - result->disparity_px;
-      const double edge_sigma = std::max(edges.sigma_px, options_.ranging.disparity_sigma_floor_px);
-      const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
-                                       edge_sigma * edge_sigma +
-                                       w * w * result->surface_check_px * result->surface_check_px);
-      result->refined = true;
-      result->refinement = "edges";
-      result->disparity_px = edges.disparity_px;
-      result->disparity_sigma_px = sigma_d;
-      result->distance_m = geometry_.DepthFromDisparity(edges.disparity_px);
-      result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
+      adopt(edges.disparity_px, edges.disparity_px - result->disparity_px,
+            std::max(edges.sigma_px, options_.ranging.disparity_sigma_floor_px), "edges");
       return;
     }
   }

@@ -287,9 +287,8 @@ std::optional<Step> FindStep(const float* p, int n, int lo, int hi, int sign, bo
     }
     return true;
   };
-  const int inside_count = std::max(1, o.surface_plateau_px);
-  if (!flat(a, -1, inside_right ? 1 : inside_count, level_a) ||
-      !flat(b, 1, inside_right ? inside_count : 1, level_b)) {
+  if (!flat(a, -1, inside_right ? 1 : o.surface_plateau_px, level_a) ||
+      !flat(b, 1, inside_right ? o.surface_plateau_px : 1, level_b)) {
     return std::nullopt;
   }
   Step step;
