@@ -332,7 +332,7 @@ TEST_F(CliTest, EvalStereoEmptyFolderIsRuntimeError) {
 
 }  // namespace
 
-// Issue 5: `range --rectified --calib C --left L --right R --roi ... --json F` on a pair that our
+// `range --rectified --calib C --left L --right R --roi ... --json F` on a pair that our
 // power-line renderer did not make (eval plates' independent renderer, a photograph-textured box
 // in front of a textured wall inside the ROI).
 TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {

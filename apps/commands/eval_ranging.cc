@@ -1,4 +1,4 @@
-// linesight eval ranging: the ranging accuracy study of issue 5 on rendered power-line scenes (true
+// linesight eval ranging: the ranging accuracy study on rendered power-line scenes (true
 // and estimated calibration), plus the metric depth check on Middlebury 2014 Motorcycle.
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The calibration simulation study of issue 4: a virtual stereo rig with known parameters, random
+// The calibration simulation study: a virtual stereo rig with known parameters, random
 // board poses, Gaussian corner noise; every method calibrates the same trials and is compared with
 // the truth and with the Cramér-Rao lower bound σ²·(JᵀJ)⁻¹ of the reprojection model at the true
 // values.

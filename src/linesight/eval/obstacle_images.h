@@ -1,4 +1,4 @@
-// Obstacle images (issue 6, item 5): the matcher comparison on synthetic power-line obstacles —
+// Obstacle images: the matcher comparison on synthetic power-line obstacles —
 // Stockbridge damper (counterweight), suspension clamp, insulator string — rendered by
 // sim::RenderPowerLineScene as an ideal rectified pair with exact ground truth, each cropped to
 // its obstacle.

@@ -1,5 +1,5 @@
-// Ranging on rectified pairs made by other means than the power-line scene's ray caster (issue 5:
-// "the same accuracy holds on rectified pairs rendered by other means").
+// Ranging on rectified pairs made by other means than the power-line scene's ray caster: the
+// ranging accuracy must hold on rectified pairs rendered by other means.
 //
 // RenderPlateScene is a small renderer of its own, independent of src/linesight/sim: textured
 // planar faces (a plate, a plate turned about its vertical axis, or a box) in front of a textured

@@ -155,7 +155,7 @@ TEST(PlateSceneTest, CaptureIsDeterministicAndNoisy) {
   EXPECT_EQ(a.type(), CV_8UC3);
 }
 
-// The acceptance case of issue 5 on other pairs: a photograph-textured plate and box at known
+// The ranging accuracy on pairs from another renderer: a photograph-textured plate and box at known
 // depths, ranged through the chain of `linesight range --rectified` with the wall inside the ROI.
 TEST(PlateStudyTest, PhotographTexturedPlateAndBoxAreRangedWithinOnePercent) {
   if (!fs::exists(kOpenCvData / "baboon.jpg") || !fs::exists(kOpenCvData / "leuvenA.jpg")) {

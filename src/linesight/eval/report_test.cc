@@ -24,7 +24,7 @@ TEST(ReportTest, DefaultsValidAndBoundaries) {
   quick.MakeQuick();
   EXPECT_NO_THROW(quick.Check());
   EXPECT_EQ(quick.sweep_max_scenes, 2);
-  // The full default covers the whole acceptance: gc and the noise study on every set.
+  // The full default covers the whole study: gc and the noise study on every set.
   EXPECT_EQ(o.gc_sets, std::vector<std::string>{"*"});
   EXPECT_TRUE(o.noise_sets.empty());
   EXPECT_EQ(o.noise.size(), 5u);

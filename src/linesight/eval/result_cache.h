@@ -1,5 +1,5 @@
 // A result cache for the stereo studies (`eval stereo --cache`, `eval report --cache`), so that a
-// study too long for one session (gc under noise: hours) accumulates across sessions and machines.
+// study too long for one run (gc under noise: hours) accumulates across runs and machines.
 //
 // An entry is one (set, scene, method, noise) cell. Its key holds everything the result depends
 // on: the method's full effective settings (StereoMatcher::Settings), its algorithm version

@@ -1,4 +1,4 @@
-// `linesight eval sweep`: one-at-a-time parameter study of the matchers (issue 6, item 4).
+// `linesight eval sweep`: one-at-a-time parameter study of the matchers.
 //
 // Every parameter is varied alone while the others stay at the centre point: for the SGBM family
 // (sgbm, sgbm-wls) num-disp 16..112 (step 16), block 3..11 (odd) and uniqueness 5..15 around

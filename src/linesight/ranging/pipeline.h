@@ -64,14 +64,13 @@ struct RangingPipelineOptions {
   // (where the two measurements of one surface disagree, one of them is off by about the
   // difference), and in 1 and 2 the refinement's noise does too. Where the refinement cannot
   // correct (too few clean pixels: see SurfaceRefinementOptions::gradient_ratio, interior_only) it
-  // is run again on every surface pixel as a check. (Mode 3 with surface.gradient_ratio = 0 and
-  // surface.interior_only = false is the default of sessions 9-10.)
-  // Why 2 is the default since session 11: the matcher flattens small fronts (the insulator's
+  // is run again on every surface pixel as a check.
+  // Why 2 is the default: the matcher flattens small fronts (the insulator's
   // rims at 1-2.5 m read 0.5 px too far; `eval ranging`, 4 runs, 0.5-5 m, estimated calibration,
   // cells off by > 1 %: 3 with mode 3, 1 with mode 2), and on `eval plates` the matched map's
   // near percentile reads flat faces at 5 m 1-1.4 % too near (82 -> 90 of 90 cells within 1 %).
-  // Mode 2 was not the default before because it then used every surface pixel: the
-  // rims' horizontal edges turned the estimated calibration's vertical error into 1.8 % too near.
+  // Mode 2 fits the interior pixels only: fitted on every surface pixel, the rims' horizontal
+  // edges turn the estimated calibration's vertical error into 1.8 % too near.
   int surface_refinement = 2;
   double surface_disagreement_weight = 1.0;  // in [0, 4]
   SurfaceRefinementOptions surface;

@@ -139,7 +139,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
 
 // Every obstacle type at 0.3 m, the near end of the working range, in the default scene (the
 // rig turned towards the line, which crosses in front of it): rendered, rectified, matched with
-// isgm and ranged with the true calibration, each reads within 3 % (issue 5's goal at 0.3 m).
+// isgm and ranged with the true calibration, each reads within 3 % (the working range's near end).
 TEST(RangingPipelineTest, RangesEveryObstacleTypeAt30Cm) {
   for (const sim::ObstacleType type : sim::AllObstacleTypes()) {
     SCOPED_TRACE(sim::ObstacleTypeName(type));

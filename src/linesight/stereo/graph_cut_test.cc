@@ -456,7 +456,7 @@ TEST(GraphCutMatcherTest, TsukubaBad1NonOccluded) {
   const double bad_percent = 100.0 * bad / evaluated;
   RecordProperty("bad1_nonocc_percent", std::to_string(bad_percent));
   std::printf("tsukuba gc bad-1.0 nonocc = %.2f %%\n", bad_percent);
-  // Issue acceptance is 3 %; 2.23 % was measured with these settings (census; 1.89 % with BT;
+  // 2.23 % was measured with these settings (census; 1.89 % with BT;
   // published GC: 1.2-1.9 %).
   EXPECT_LE(bad_percent, 2.5);
 }
