@@ -104,6 +104,23 @@ TEST_P(OpenCvMatcherTest, DifferentSizesIsInputError) {
   EXPECT_THROW(matcher->Compute(cv::Mat(20, 30, CV_8UC1), cv::Mat(20, 31, CV_8UC1)), InputError);
 }
 
+// `threads` sizes OpenCV's pool for the call only: the process-wide setting is the caller's.
+TEST(StereoMatcher, ComputeLeavesTheProcessWideThreadCountAlone) {
+  cv::Mat left, right;
+  MakeShiftedPair(64, 40, 5, &left, &right);
+  const int saved = cv::getNumThreads();
+  cv::setNumThreads(2);
+  for (const std::string method : {"bm", "sgbm", "sgbm-wls", "isgm"}) {
+    SCOPED_TRACE(method);
+    MatcherOptions options;
+    options.num_disparities = 16;
+    options.threads = 1;
+    CreateMatcher(method, options)->Compute(left, right);
+    EXPECT_EQ(cv::getNumThreads(), 2);
+  }
+  cv::setNumThreads(saved);
+}
+
 INSTANTIATE_TEST_SUITE_P(Methods, OpenCvMatcherTest, ::testing::Values("bm", "sgbm", "sgbm-wls"));
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/core/scoped_threads.h"
 
 namespace linesight {
 namespace {
@@ -51,7 +52,7 @@ class OpenCvBlockMatcher final : public StereoMatcher {
 
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
-    if (options_.threads > 0) cv::setNumThreads(options_.threads);
+    const ScopedOpenCvThreads threads(options_.threads);
     cv::Mat fixed;
     bm_->compute(ToGray8(left), ToGray8(right), fixed);
     return FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
@@ -109,7 +110,7 @@ class OpenCvSgbm final : public StereoMatcher {
 
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
-    if (options_.threads > 0) cv::setNumThreads(options_.threads);
+    const ScopedOpenCvThreads threads(options_.threads);
     cv::Mat fixed;
     sgbm_->compute(ToGray8(left), ToGray8(right), fixed);
     return FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
@@ -158,7 +159,7 @@ class OpenCvSgbmWls final : public StereoMatcher {
 
   cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
-    if (options_.threads > 0) cv::setNumThreads(options_.threads);
+    const ScopedOpenCvThreads threads(options_.threads);
     const cv::Mat left_gray = ToGray8(left), right_gray = ToGray8(right);
     cv::Mat left_fixed, right_fixed, filtered;
     sgbm_.matcher()->compute(left_gray, right_gray, left_fixed);
