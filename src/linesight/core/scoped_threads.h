@@ -1,10 +1,21 @@
-// Sizes OpenCV's thread pool for one call and restores the caller's setting afterwards, so that a
-// library call with `threads = N` never changes the process-wide cv::setNumThreads.
+// Thread counts of library calls. ScopedOpenCvThreads sizes OpenCV's thread pool for one call and
+// restores the caller's setting afterwards, so that a library call with `threads = N` never changes
+// the process-wide cv::setNumThreads.
 #pragma once
+
+#include <algorithm>
+#include <thread>
 
 #include <opencv2/core/utility.hpp>
 
 namespace linesight {
+
+// The number of threads a call with option `threads = requested` uses: requested if > 0, else one
+// per hardware thread (at least 1).
+inline int ResolveThreadCount(int requested) {
+  if (requested > 0) return requested;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
 
 class ScopedOpenCvThreads {
  public:

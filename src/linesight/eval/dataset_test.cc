@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/eval/eval_test_util.h"
 #include "linesight/io/pfm.h"
 
 namespace linesight {
@@ -22,8 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kSharedData = LINESIGHT_SHARED_DATA_DIR;
-const fs::path kOpenCvData = LINESIGHT_OPENCV_DATA_DIR;
+using test::kOpenCvData;
+using test::kSharedData;
 
 bool HaveSharedData() { return fs::exists(kSharedData / "middlebury-2001-2003"); }
 bool HaveAloe() { return fs::exists(kOpenCvData / "aloeGT.png"); }

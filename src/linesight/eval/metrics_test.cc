@@ -6,11 +6,12 @@
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
+#include "linesight/eval/eval_test_util.h"
 
 namespace linesight {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
+using test::kInf;
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 
 cv::Mat Row(std::initializer_list<float> values) {

@@ -6,12 +6,13 @@
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
+#include "linesight/eval/eval_test_util.h"
 #include "linesight/eval/synthetic_scenes_test_util.h"
 
 namespace linesight {
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
+using test::kInf;
 
 struct FullImages {
   cv::Mat left, right, ground_truth, mask;

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/eval/eval_test_util.h"
 #include "linesight/geometry/depth.h"
 #include "linesight/io/image_io.h"
 
@@ -15,7 +16,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kOpenCvData = "/usr/share/doc/opencv-doc/examples/data";
+using test::kOpenCvData;
 
 // A textured test image without any file: smooth random blobs.
 cv::Mat NoiseTexture(int size, unsigned seed) {

@@ -21,6 +21,7 @@
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/error.h"
 #include "linesight/core/progress.h"
+#include "linesight/core/scoped_threads.h"
 #include "linesight/eval/dataset.h"
 #include "linesight/eval/eval_stereo.h"
 #include "linesight/eval/plot.h"
@@ -126,10 +127,7 @@ std::unique_ptr<ProgressBar> MakeProgress(const ReportOptions& options, int64_t 
   return std::make_unique<ProgressBar>(total, label, options.show_progress && StderrIsTerminal());
 }
 
-int GcJobs(const ReportOptions& options) {
-  return options.gc_jobs > 0 ? options.gc_jobs
-                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
+int GcJobs(const ReportOptions& options) { return ResolveThreadCount(options.gc_jobs); }
 
 // gc on every (scene, noise) pair, single-threaded runs side by side on GcJobs() threads. Every
 // run is independent (own matcher, noise seeded per scene and view), so the results do not depend

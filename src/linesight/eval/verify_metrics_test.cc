@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "linesight/eval/dataset.h"
+#include "linesight/eval/eval_test_util.h"
 #include "linesight/eval/metrics.h"
 #include "linesight/io/json_io.h"
 #include "linesight/io/pfm.h"
@@ -29,8 +30,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kSharedData = LINESIGHT_SHARED_DATA_DIR;
-const fs::path kOpenCvData = LINESIGHT_OPENCV_DATA_DIR;
+using test::kOpenCvData;
+using test::kSharedData;
 const fs::path kScript = fs::path(LINESIGHT_SOURCE_DIR) / "scripts" / "verify_metrics.py";
 constexpr const char* kPython = "/usr/bin/python3";
 

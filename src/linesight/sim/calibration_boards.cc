@@ -109,7 +109,7 @@ int CountOutside(const CameraIntrinsics& k, const detail::PosedCamera& camera, c
   int outside = 0;
   for (const Vec3& p : points) {
     const Vec3 c = camera.camera_from_scene.Apply(pose.Apply(p)) + camera.translation;
-    double u, v;
+    double u = 0.0, v = 0.0;
     if (c.z < 0.05 || !detail::ProjectPoint(k, c, &u, &v) || u < margin || v < margin ||
         u > size.width - 1 - margin || v > size.height - 1 - margin) {
       ++outside;
@@ -228,7 +228,7 @@ CalibrationBoardSet RenderCalibrationBoards(const CalibrationBoardOptions& optio
         AllInside(options.rig.right, poses.right, pose, layout.outline, size, 0.0);
     for (const cv::Point3f& p : object_points) {
       const Vec3 world = pose.Apply({p.x, p.y, p.z});
-      double u, v;
+      double u = 0.0, v = 0.0;
       detail::ProjectPoint(options.rig.left,
                            poses.left.camera_from_scene.Apply(world) + poses.left.translation, &u,
                            &v);

@@ -16,6 +16,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/core/scoped_threads.h"
 #include "linesight/core/timer.h"
 
 namespace linesight {
@@ -28,11 +29,6 @@ const char* DataTermName(GraphCutDataTerm term) {
 
 const char* LabelOrderName(GraphCutLabelOrder order) {
   return order == GraphCutLabelOrder::kRandom ? "random" : "sequential";
-}
-
-int EffectiveThreads(int requested) {
-  if (requested > 0) return requested;
-  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
 int32_t ToCostUnits(double value) {
@@ -628,7 +624,7 @@ GraphCutResult GraphCutMatcher::ComputeDetailed(const cv::Mat& left, const cv::M
       right_view = SolveView(mirrored, options_);
       cv::flip(right_view.disparity, right_view.disparity, 1);
     };
-    if (EffectiveThreads(options_.threads) >= 2) {
+    if (ResolveThreadCount(options_.threads) >= 2) {
       std::thread worker(solve_right);
       left_view = SolveView(images, options_);
       worker.join();

@@ -9,6 +9,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/core/scoped_threads.h"
 #include "linesight/stereo/sgm_stages.h"
 
 namespace linesight {
@@ -25,11 +26,6 @@ const char* SubpixelName(SgmSubpixel mode) {
       return "parabola";
   }
   return "?";
-}
-
-int EffectiveThreads(int requested) {
-  if (requested > 0) return requested;
-  return std::max(1u, std::thread::hardware_concurrency());
 }
 
 }  // namespace
@@ -192,7 +188,7 @@ void SgmMatcher::Run(const cv::Mat& left_input, const cv::Mat& right_input, bool
   if (!right.isContinuous()) right = right.clone();
   const SgmOptions& o = options_;
   const int w = left.cols, h = left.rows, num = o.num_disparities, dmin = o.min_disparity;
-  const int threads = EffectiveThreads(o.threads);
+  const int threads = ResolveThreadCount(o.threads);
   Scratch& s = *scratch_;
 
   // Stage 1: census transform of both images.
