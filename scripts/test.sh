@@ -24,7 +24,7 @@ fi
 
 echo "== release build (warnings as errors) [$(date -u +%T)]"
 cmake -S . -B build -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=Release -DLINESIGHT_WERROR=ON \
-  -DLINESIGHT_STRICT=ON >/dev/null
+  -DLINESIGHT_UNITY_BUILD=ON >/dev/null
 cmake --build build -j"$JOBS"
 
 echo "== tests [$(date -u +%T)]"
@@ -32,8 +32,8 @@ ctest --test-dir build --output-on-failure -j"$JOBS" --timeout 600
 
 if [ "${CI:-}" = "true" ]; then
   echo "== ASan+UBSan build of the tests [$(date -u +%T)]"
-  cmake -S . -B build-asan -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
-    -DLINESIGHT_WERROR=ON -DLINESIGHT_STRICT=ON -DLINESIGHT_SANITIZE=ON -DLINESIGHT_BUILD_BENCHMARKS=OFF >/dev/null
+  cmake -S . -B build-asan -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
+    -DLINESIGHT_WERROR=ON -DLINESIGHT_UNITY_BUILD=ON -DLINESIGHT_SANITIZE=ON -DLINESIGHT_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build build-asan -j"$JOBS"
   echo "== tests under ASan+UBSan [$(date -u +%T)]"
   ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
