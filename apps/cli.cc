@@ -36,9 +36,9 @@ int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>
 }
 
 void AddParamOption(CLI::App& app, std::vector<std::string>* raw) {
-  app.add_option(
-         "--param", *raw,
-         "method parameter key=value (repeatable, or comma-separated); see README per method")
+  app.add_option("--param", *raw,
+                 "method parameter key=value (repeatable, or comma-separated); keys per method in "
+                 "docs/algorithms/")
       ->delimiter(',');
 }
 

@@ -430,7 +430,7 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
                          fmt::join(partial, "; "));
     }
   }
-  // Every scene: the acceptance asks for every method on every scene at every setting.
+  // Every scene: every method on every scene at every setting, so no mean hides a scene.
   out += "<details><summary>Per scene (headline error of the scene's set, dense %)</summary>\n\n";
   out += "| set | scene | method |";
   for (const std::string& l : labels) out += " " + l + " |";

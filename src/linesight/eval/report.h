@@ -1,5 +1,5 @@
 // `linesight eval report`: regenerates one markdown page (docs/results/README.md) with every table
-// and plot of the comparison study (issue 6, item 6):
+// and plot of the comparison study:
 //   1. a paper-style comparison table (correct-match rate = 100 - headline bad % per scene, total
 //      operation time) per method;
 //   2. the stereo benchmark tables (every method over every set, clean);

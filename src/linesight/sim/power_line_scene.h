@@ -1,4 +1,4 @@
-// Synthetic power-line scenes with exact ground truth (issue 5, item 1).
+// Synthetic power-line scenes with exact ground truth.
 //
 // A stereo rig modelled on the MYNT S1030 (752x480, fx ~ 736 px, baseline ~ 119 mm, plumb-bob
 // distortion, slightly misaligned cameras) looks along a power-line conductor from a robot riding

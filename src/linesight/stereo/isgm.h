@@ -18,11 +18,11 @@
 namespace linesight {
 
 // SGM settings that suit the plane refinement (one set for every scene, chosen over all benchmark
-// sets, see README): a 7x5 census window (less foreground fattening at depth edges than 9x7),
-// P1 = 14, P2 = 100, a strongly gradient-adapted P2 (alpha 4) and 4 paths; everything else is
-// SgmOptions' default. 4 paths rather than 8: after the refinement they are as accurate on the
-// benchmarks (`eval stereo`, headline error 8 -> 4 paths: ETH3D 4.69 -> 4.47, KITTI 4.17 -> 3.95,
-// Middlebury 2001/2003 3.28 -> 3.24, 2005/2006 3.89 -> 3.66, 2014 3.66 -> 3.99, Scene Flow
+// sets, see docs/algorithms/isgm.md): a 7x5 census window (less foreground fattening at depth edges
+// than 9x7), P1 = 14, P2 = 100, a strongly gradient-adapted P2 (alpha 4) and 4 paths; everything
+// else is SgmOptions' default. 4 paths rather than 8: after the refinement they are as accurate on
+// the benchmarks (`eval stereo`, headline error 8 -> 4 paths: ETH3D 4.69 -> 4.47, KITTI 4.17
+// -> 3.95, Middlebury 2001/2003 3.28 -> 3.24, 2005/2006 3.89 -> 3.66, 2014 3.66 -> 3.99, Scene Flow
 // 40.77 -> 41.79) and the aggregation, half of isgm's time, costs two thirds (`linesight bench`:
 // 1.2x the frame rate). The ranging chain keeps 8 paths (RangingMatcherParams in
 // ranging/pipeline.h): on small obstacle fronts they are measurably better.
