@@ -1,9 +1,8 @@
-// Naive scalar references of every optimised SGM stage (CONVENTIONS.md §7), and exact comparisons
-// with the SIMD kernels for every Highway target this CPU supports, on awkward sizes, disparity
+// Exact comparisons of every optimised SGM stage with its naive scalar reference (sgm_reference.h,
+// CONVENTIONS.md §7) for every Highway target this CPU supports, on awkward sizes, disparity
 // ranges, path counts and thread counts.
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -18,6 +17,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/stereo/sgm.h"
+#include "linesight/stereo/sgm_reference.h"
 #include "linesight/stereo/sgm_stages.h"
 
 namespace linesight {
@@ -44,49 +44,6 @@ void MakePair(int width, int height, double d0, uint64_t seed, cv::Mat* left, cv
       right->at<uint8_t>(y, x) = texture.at<uint8_t>(y, std::min(src, texture.cols - 1));
     }
   }
-}
-
-// ------------------------------------------------------------------------------------------
-// references
-std::vector<uint64_t> ReferenceCensus(const cv::Mat& gray, int ww, int wh) {
-  const int w = gray.cols, h = gray.rows;
-  std::vector<uint64_t> codes(static_cast<size_t>(w) * h);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const int centre = gray.at<uint8_t>(y, x);
-      uint64_t code = 0;
-      int bit = 0;
-      for (int dy = -wh / 2; dy <= wh / 2; ++dy) {
-        for (int dx = -ww / 2; dx <= ww / 2; ++dx) {
-          if (dx == 0 && dy == 0) continue;
-          const int v =
-              gray.at<uint8_t>(std::clamp(y + dy, 0, h - 1), std::clamp(x + dx, 0, w - 1));
-          if (v < centre) code |= uint64_t{1} << bit;
-          ++bit;
-        }
-      }
-      codes[static_cast<size_t>(y) * w + x] = code;
-    }
-  }
-  return codes;
-}
-
-// Birchfield–Tomasi in half grey levels, from the definition.
-int ReferenceBt2(const uint8_t* left, const uint8_t* right, int w, int x, int xr) {
-  auto range = [w](const uint8_t* row, int i, int* lo, int* hi) {
-    const int c = 2 * row[i];
-    const int minus = row[i] + row[std::max(i - 1, 0)];
-    const int plus = row[i] + row[std::min(i + 1, w - 1)];
-    *lo = std::min({c, minus, plus});
-    *hi = std::max({c, minus, plus});
-  };
-  int lmin, lmax, rmin, rmax;
-  range(left, x, &lmin, &lmax);
-  range(right, xr, &rmin, &rmax);
-  const int il = 2 * left[x], ir = 2 * right[xr];
-  const int d_lr = std::max({0, il - rmax, rmin - il});
-  const int d_rl = std::max({0, ir - lmax, lmin - ir});
-  return std::min(d_lr, d_rl);
 }
 
 struct Config {
@@ -134,149 +91,56 @@ struct Reference {
   std::vector<uint64_t> census_left, census_right;
   std::vector<uint16_t> cost;  // [y][x][k], num_disparities lanes
   std::vector<uint32_t> sum;   // [y][x][k]
-  std::vector<int> best, best_cost, second, right_best;
+  reference::WinnerTakesAllResult winners;
   cv::Mat disparity;  // final float output
 };
 
+detail::CostInput CostInputFor(const Config& c, const Reference& r) {
+  detail::CostInput in;
+  in.width = c.width;
+  in.height = c.height;
+  in.min_disparity = c.min_disparity;
+  in.num_disparities = c.num_disparities;
+  in.census_bits = c.census_width * c.census_height - 1;
+  in.bt_weight = c.bt_weight;
+  in.bt_truncation = SgmOptions().bt_truncation;
+  in.census_left = r.census_left.data();
+  in.census_right = r.census_right.data();
+  in.gray_left = r.left.ptr<uint8_t>();
+  in.gray_right = r.right.ptr<uint8_t>();
+  return in;
+}
+
+detail::AggregationInput AggregationInputFor(const Config& c, const Reference& r) {
+  const SgmOptions o = OptionsFor(c);
+  detail::AggregationInput in;
+  in.cost = CostInputFor(c, r);
+  in.num_paths = o.num_paths;
+  in.p1 = o.p1;
+  in.p2 = o.p2;
+  in.p2_gradient_alpha = o.p2_gradient_alpha;
+  return in;
+}
+
+// Every stage of the pipeline from its reference; the speckle filter is OpenCV's, used as is.
 Reference ComputeReference(const Config& c) {
   Reference r;
   MakePair(c.width, c.height, std::max(0, c.min_disparity) + 4, 11, &r.left, &r.right);
   const SgmOptions o = OptionsFor(c);
-  const int w = c.width, h = c.height, num = c.num_disparities, dmin = c.min_disparity;
-  r.census_left = ReferenceCensus(r.left, c.census_width, c.census_height);
-  r.census_right = ReferenceCensus(r.right, c.census_width, c.census_height);
-  const int bits = c.census_width * c.census_height - 1;
-  const int max_cost = bits + (o.bt_weight * 2 * o.bt_truncation) / 16;
-  auto at = [&](int y, int x, int k) { return (static_cast<size_t>(y) * w + x) * num + k; };
-  r.cost.assign(static_cast<size_t>(w) * h * num, 0);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      for (int k = 0; k < num; ++k) {
-        const int xr = x - dmin - k;
-        int cost = max_cost;
-        if (xr >= 0 && xr < w) {
-          cost = std::popcount(r.census_left[static_cast<size_t>(y) * w + x] ^
-                               r.census_right[static_cast<size_t>(y) * w + xr]);
-          if (o.bt_weight > 0) {
-            const int bt2 = ReferenceBt2(r.left.ptr<uint8_t>(y), r.right.ptr<uint8_t>(y), w, x, xr);
-            cost += (o.bt_weight * std::min(bt2, 2 * o.bt_truncation)) / 16;
-          }
-        }
-        r.cost[at(y, x, k)] = static_cast<uint16_t>(cost);
-      }
-    }
-  }
-  // Path aggregation, one direction at a time, straight from the recurrence.
-  std::vector<std::pair<int, int>> directions = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-  if (c.paths == 8) directions.insert(directions.end(), {{1, 1}, {-1, 1}, {1, -1}, {-1, -1}});
-  r.sum.assign(r.cost.size(), 0);
-  std::vector<int> path(r.cost.size());
-  for (const auto& [dx, dy] : directions) {
-    for (int yi = 0; yi < h; ++yi) {
-      const int y = dy >= 0 ? yi : h - 1 - yi;
-      for (int xi = 0; xi < w; ++xi) {
-        const int x = dx >= 0 ? xi : w - 1 - xi;
-        const int px = x - dx, py = y - dy;
-        const bool start = px < 0 || px >= w || py < 0 || py >= h;
-        int prev_min = 0, p2 = o.p2;
-        if (!start) {
-          prev_min = *std::min_element(&path[at(py, px, 0)], &path[at(py, px, 0)] + num);
-          const int step = std::abs(r.left.at<uint8_t>(y, x) - r.left.at<uint8_t>(py, px));
-          if (o.p2_gradient_alpha > 0) {
-            p2 = std::max(o.p1 + 1, o.p2 * o.p2_gradient_alpha / (o.p2_gradient_alpha + step));
-          }
-        }
-        for (int k = 0; k < num; ++k) {
-          int value = r.cost[at(y, x, k)];
-          if (!start) {
-            int best = path[at(py, px, k)];
-            if (k > 0) best = std::min(best, path[at(py, px, k - 1)] + o.p1);
-            if (k + 1 < num) best = std::min(best, path[at(py, px, k + 1)] + o.p1);
-            best = std::min(best, prev_min + p2);
-            value += best - prev_min;
-          }
-          path[at(y, x, k)] = value;
-          r.sum[at(y, x, k)] += value;
-        }
-      }
-    }
-  }
-  // Winner-takes-all (left and right view), uniqueness, subpixel, left-right check.
-  r.best.assign(static_cast<size_t>(w) * h, 0);
-  r.best_cost = r.second = r.right_best = r.best;
-  cv::Mat fixed(h, w, CV_16SC1);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const uint32_t* s = &r.sum[at(y, x, 0)];
-      const int best = static_cast<int>(std::min_element(s, s + num) - s);
-      int second = 0xFFFF;
-      for (int k = 0; k < num; ++k) {
-        if (std::abs(k - best) > 1) second = std::min(second, static_cast<int>(s[k]));
-      }
-      const size_t i = static_cast<size_t>(y) * w + x;
-      r.best[i] = best;
-      r.best_cost[i] = static_cast<int>(s[best]);
-      r.second[i] = second;
-    }
-    for (int xr = 0; xr < w; ++xr) {
-      int best = -1;
-      uint32_t best_cost = 0;
-      for (int k = 0; k < num; ++k) {
-        const int x = xr + dmin + k;
-        if (x < 0 || x >= w) continue;
-        if (best < 0 || r.sum[at(y, x, k)] < best_cost) {
-          best = k;
-          best_cost = r.sum[at(y, x, k)];
-        }
-      }
-      r.right_best[static_cast<size_t>(y) * w + xr] = best;
-    }
-    for (int x = 0; x < w; ++x) {
-      const size_t i = static_cast<size_t>(y) * w + x;
-      const int best = r.best[i];
-      int16_t& out = fixed.at<int16_t>(y, x);
-      out = kSgmInvalidFixed;
-      if (x - dmin < 0 || x - dmin - (num - 1) >= w) continue;
-      if (static_cast<int64_t>(r.second[i]) * (100 - o.uniqueness_ratio) <
-          int64_t{r.best_cost[i]} * 100)
-        continue;
-      const int xr = x - dmin - best;
-      if (xr < 0 || xr >= w) continue;
-      const int right = r.right_best[static_cast<size_t>(y) * w + xr];
-      if (right < 0 || std::abs(right - best) > o.lr_max_diff) continue;
-      double offset = 0;
-      if (best > 0 && best < num - 1 && o.subpixel != SgmSubpixel::kNone) {
-        const double c0 = r.sum[at(y, x, best - 1)], c1 = r.sum[at(y, x, best)],
-                     c2 = r.sum[at(y, x, best + 1)];
-        const double den = o.subpixel == SgmSubpixel::kEquiangular ? 2 * (std::max(c0, c2) - c1)
-                                                                   : 2 * (c0 + c2 - 2 * c1);
-        if (den > 0) offset = std::round((c0 - c2) * kSgmSubpixelScale / den);
-      }
-      out = static_cast<int16_t>((dmin + best) * kSgmSubpixelScale + static_cast<int>(offset));
-    }
-  }
-  // Speckle filter (OpenCV's, used as is) and the median of valid neighbours.
+  r.census_left = reference::Census(r.left, c.census_width, c.census_height);
+  r.census_right = reference::Census(r.right, c.census_width, c.census_height);
+  const detail::AggregationInput in = AggregationInputFor(c, r);
+  r.cost = reference::MatchingCost(in.cost);
+  r.sum = reference::AggregatePaths(in, r.cost);
+  r.winners =
+      reference::WinnerTakesAll(r.sum, c.width, c.height, c.num_disparities, c.min_disparity);
+  cv::Mat fixed = reference::SelectDisparities(r.sum, r.winners, c.width, c.height, o);
   cv::filterSpeckles(fixed, kSgmInvalidFixed, o.speckle_window,
                      static_cast<int>(std::lround(o.speckle_range * kSgmSubpixelScale)));
-  cv::Mat median = fixed.clone();
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      if (fixed.at<int16_t>(y, x) == kSgmInvalidFixed) continue;
-      std::vector<int> values;
-      for (int yy = y - 1; yy <= y + 1; ++yy) {
-        for (int xx = x - 1; xx <= x + 1; ++xx) {
-          if (yy < 0 || yy >= h || xx < 0 || xx >= w) continue;
-          if (fixed.at<int16_t>(yy, xx) != kSgmInvalidFixed)
-            values.push_back(fixed.at<int16_t>(yy, xx));
-        }
-      }
-      std::sort(values.begin(), values.end());
-      median.at<int16_t>(y, x) = static_cast<int16_t>(values[(values.size() - 1) / 2]);
-    }
-  }
-  r.disparity.create(h, w, CV_32FC1);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
+  const cv::Mat median = reference::MedianValid3x3(fixed);
+  r.disparity.create(c.height, c.width, CV_32FC1);
+  for (int y = 0; y < c.height; ++y) {
+    for (int x = 0; x < c.width; ++x) {
       const int v = median.at<int16_t>(y, x);
       r.disparity.at<float>(y, x) = v == kSgmInvalidFixed ? kInvalidDisparity : v / 16.0f;
     }
@@ -291,24 +155,6 @@ const Reference& CachedReference(const Config& c) {
   auto it = cache.find(key);
   if (it == cache.end()) it = cache.emplace(key, ComputeReference(c)).first;
   return it->second;
-}
-
-detail::CostInput CostInputFor(const Config& c, const Reference& r,
-                               const std::vector<uint64_t>& census_left,
-                               const std::vector<uint64_t>& census_right) {
-  detail::CostInput in;
-  in.width = c.width;
-  in.height = c.height;
-  in.min_disparity = c.min_disparity;
-  in.num_disparities = c.num_disparities;
-  in.census_bits = c.census_width * c.census_height - 1;
-  in.bt_weight = c.bt_weight;
-  in.bt_truncation = SgmOptions().bt_truncation;
-  in.census_left = census_left.data();
-  in.census_right = census_right.data();
-  in.gray_left = r.left.ptr<uint8_t>();
-  in.gray_right = r.right.ptr<uint8_t>();
-  return in;
 }
 
 // Configurations: odd sizes, num-disp 37 and 64, min-disp 0 / positive / negative, 4 and 8 paths, 1
@@ -397,7 +243,7 @@ TEST_P(SgmKernelTest, CensusEqualsReference) {
 TEST_P(SgmKernelTest, MatchingCostEqualsReference) {
   for (const Config& c : Configs()) {
     const Reference& r = CachedReference(c);
-    const detail::CostInput in = CostInputFor(c, r, r.census_left, r.census_right);
+    const detail::CostInput in = CostInputFor(c, r);
     const int padded = detail::PaddedDisparities(c.num_disparities);
     std::vector<uint16_t> row(static_cast<size_t>(c.width) * padded);
     for (int y = 0; y < c.height; y += 7) {
@@ -416,13 +262,7 @@ TEST_P(SgmKernelTest, MatchingCostEqualsReference) {
 TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
   for (const Config& c : Configs()) {
     const Reference& r = CachedReference(c);
-    detail::AggregationInput in;
-    in.cost = CostInputFor(c, r, r.census_left, r.census_right);
-    const SgmOptions o = OptionsFor(c);
-    in.num_paths = o.num_paths;
-    in.p1 = o.p1;
-    in.p2 = o.p2;
-    in.p2_gradient_alpha = o.p2_gradient_alpha;
+    const detail::AggregationInput in = AggregationInputFor(c, r);
     for (int threads : {1, 2}) {
       detail::SumVolume partial;
       detail::SweepScratch forward, backward;
@@ -458,10 +298,12 @@ TEST_P(SgmKernelTest, AggregationAndWinnerTakesAllEqualReference) {
                                   scratch.data());
         for (int x = 0; x < c.width; ++x) {
           const size_t i = static_cast<size_t>(y) * c.width + x;
-          ASSERT_EQ(best[x], r.best[i]) << Describe(c) << " x=" << x << " y=" << y;
-          ASSERT_EQ(best_cost[x], r.best_cost[i]) << Describe(c) << " x=" << x << " y=" << y;
-          ASSERT_EQ(second[x], r.second[i]) << Describe(c) << " x=" << x << " y=" << y;
-          ASSERT_EQ(right_best[x], r.right_best[i]) << Describe(c) << " xr=" << x << " y=" << y;
+          ASSERT_EQ(best[x], r.winners.best[i]) << Describe(c) << " x=" << x << " y=" << y;
+          ASSERT_EQ(best_cost[x], r.winners.best_cost[i])
+              << Describe(c) << " x=" << x << " y=" << y;
+          ASSERT_EQ(second[x], r.winners.second[i]) << Describe(c) << " x=" << x << " y=" << y;
+          ASSERT_EQ(right_best[x], r.winners.right_best[i])
+              << Describe(c) << " xr=" << x << " y=" << y;
         }
         // Without the second best (what Compute asks for when the uniqueness ratio is 0) the other
         // outputs are the same.
@@ -531,28 +373,6 @@ TEST(SgmScalarStages, LeftRightCheckByHand) {
   EXPECT_FALSE(detail::LeftRightConsistent(2, 4, right_best, 6, 1, 5));
 }
 
-// Naive lower median of the valid values of the 3×3 window (the centre must be valid).
-cv::Mat NaiveMedianValid3x3(const cv::Mat& src) {
-  cv::Mat dst(src.size(), CV_16SC1, cv::Scalar(kSgmInvalidFixed));
-  for (int y = 0; y < src.rows; ++y) {
-    for (int x = 0; x < src.cols; ++x) {
-      if (src.at<int16_t>(y, x) == kSgmInvalidFixed) continue;
-      std::vector<int16_t> values;
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int yy = y + dy, xx = x + dx;
-          if (yy < 0 || yy >= src.rows || xx < 0 || xx >= src.cols) continue;
-          if (src.at<int16_t>(yy, xx) != kSgmInvalidFixed)
-            values.push_back(src.at<int16_t>(yy, xx));
-        }
-      }
-      std::sort(values.begin(), values.end());
-      dst.at<int16_t>(y, x) = values[(values.size() - 1) / 2];
-    }
-  }
-  return dst;
-}
-
 TEST_P(SgmKernelTest, MedianOfValidNeighboursEqualsReference) {
   cv::RNG rng(17);
   // Odd widths, a width below one vector, single rows / columns, every invalid density.
@@ -572,7 +392,7 @@ TEST_P(SgmKernelTest, MedianOfValidNeighboursEqualsReference) {
           src.at<int16_t>(y, x) = v;
         }
       }
-      const cv::Mat want = NaiveMedianValid3x3(src);
+      const cv::Mat want = reference::MedianValid3x3(src);
       cv::Mat got(h, w, CV_16SC1, cv::Scalar(0));
       // Row ranges as threads would split them.
       detail::MedianValid3x3(src, got, 0, h / 3);

@@ -1,7 +1,8 @@
 // The stages of SgmMatcher as free functions over plain buffers (CONVENTIONS.md §4). The SIMD
-// kernels (census, matching cost, path aggregation, winner-takes-all) are compiled for every
-// Highway target and dispatched at run time; sgm_reference_test.cc holds a naive scalar reference
-// of each and checks that they agree exactly.
+// kernels are compiled for every Highway target and dispatched at run time, one file per stage:
+// sgm_census.cc, sgm_matching_cost.cc, sgm_aggregation.cc, sgm_winner_takes_all.cc and
+// sgm_median.cc; sgm_reference.h holds a naive scalar reference of each, and
+// sgm_reference_test.cc checks that they agree exactly.
 #pragma once
 
 #include <cstddef>
