@@ -18,6 +18,7 @@
 #include "linesight/core/error.h"
 #include "linesight/core/scoped_threads.h"
 #include "linesight/core/timer.h"
+#include "linesight/stereo/disparity_fill.h"
 
 namespace linesight {
 
@@ -567,29 +568,6 @@ cv::Mat LeftRightCheck(const cv::Mat& left_disparity, const cv::Mat& right_dispa
   return checked;
 }
 
-// Occluded pixels belong to the farther surface: take the smaller of the nearest valid disparities
-// on the row.
-void FillFromBackground(cv::Mat& disparity) {
-  const int width = disparity.cols;
-  std::vector<float> from_left(width);
-  for (int y = 0; y < disparity.rows; ++y) {
-    float* row = disparity.ptr<float>(y);
-    float last = kInvalidDisparity;
-    for (int x = 0; x < width; ++x) {
-      if (IsValidDisparity(row[x])) last = row[x];
-      from_left[x] = last;
-    }
-    last = kInvalidDisparity;
-    for (int x = width - 1; x >= 0; --x) {
-      if (IsValidDisparity(row[x])) {
-        last = row[x];
-        continue;
-      }
-      row[x] = std::min(from_left[x], last);  // +inf when neither side has a value
-    }
-  }
-}
-
 }  // namespace
 
 GraphCutMatcher::GraphCutMatcher(const GraphCutOptions& options) : options_(options) {
@@ -644,7 +622,11 @@ GraphCutResult GraphCutMatcher::ComputeDetailed(const cv::Mat& left, const cv::M
     result.right_disparity = right_view.disparity;
     result.disparity =
         LeftRightCheck(left_view.disparity, right_view.disparity, options_.lr_max_diff);
-    if (options_.fill_occlusions) FillFromBackground(result.disparity);
+    // Occluded pixels belong to the farther surface; rows the check left without any valid pixel
+    // stay invalid.
+    if (options_.fill_occlusions) {
+      detail::FillFromBackground(&result.disparity, {.fill_empty_rows = false, .parallel = false});
+    }
   } else {
     result.disparity = left_view.disparity.clone();
   }

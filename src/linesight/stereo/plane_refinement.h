@@ -10,9 +10,9 @@
 //  4. AdoptNeighbourPlanes: a segment without a plane of its own takes the plane of an adjacent
 //     segment that explains its valid disparities.
 //  5. ApplySegmentPlanes: outliers (far from the accepted plane) and holes take the plane value.
-//  6. FillFromBackground: what is still invalid takes the smaller (background) disparity of the
-//     nearest valid pixels left and right on its row (Hirschmueller's occlusion filling), so the
-//     result is 100 % dense.
+//  6. FillFromBackground (disparity_fill.h): what is still invalid takes the smaller (background)
+//     disparity of the nearest valid pixels left and right on its row (Hirschmueller's occlusion
+//     filling), so the result is 100 % dense.
 //  7. A final median (cv::medianBlur over row stripes in parallel,
 //  PlaneRefinementOptions::median_size).
 // Every stage is deterministic and independent of the thread count (per-segment work writes only
@@ -206,11 +206,6 @@ void ApplySegmentPlanes(const SegmentIndex& index, const std::vector<SegmentMode
                         const PlaneRefinementOptions& options, const SegmentPhotometry* photometry,
                         float min_value, float max_value, cv::Mat* disparity,
                         PlaneRefinementStats* stats);
-
-// Fills every invalid pixel with the smaller of the nearest valid disparities left and right on its
-// row (one side if only one exists); rows without any valid pixel copy the nearest filled row; an
-// image without any valid pixel becomes 0. Returns the number of pixels filled.
-int64_t FillFromBackground(cv::Mat* disparity);
 
 // cv::medianBlur(src, ksize) computed over row stripes in parallel (OpenCV's float median runs on
 // one thread); each stripe is filtered with the ksize / 2 rows of context it needs, so the result

@@ -340,20 +340,6 @@ TEST(MedianBlurStripes, EqualsOpenCvMedianForAnyThreadCount) {
   cv::setNumThreads(saved_threads);
 }
 
-TEST(FillFromBackground, TakesTheSmallerSideAlongTheRow) {
-  const float inf = kInvalidDisparity;
-  cv::Mat d = (cv::Mat_<float>(4, 7) << 20, 20, inf, inf, inf, 10, 10,  // occlusion between
-               inf, inf, 5, 6, inf, inf, inf,                           // edges: one side only
-               inf, inf, inf, inf, inf, inf, inf,  // empty row: copy a neighbour
-               3, inf, 40, inf, 7, inf, 8);
-  EXPECT_EQ(detail::FillFromBackground(&d), 3 + 5 + 7 + 3);
-  const cv::Mat expected = (cv::Mat_<float>(4, 7) << 20, 20, 10, 10, 10, 10, 10,  //
-                            5, 5, 5, 6, 6, 6, 6,                                  //
-                            5, 5, 5, 6, 6, 6, 6,                                  //
-                            3, 3, 40, 7, 7, 7, 8);
-  EXPECT_EQ(cv::norm(d, expected, cv::NORM_INF), 0.0) << d;
-}
-
 TEST(RefineDisparityWithPlanes, OcclusionTakesTheBackground) {
   // Foreground square (d = 30) on a background (d = 8); the band left of the square (its occlusion
   // in the left view) is invalid and lies in flat-coloured segments without own support.
