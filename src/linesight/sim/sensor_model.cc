@@ -8,7 +8,29 @@
 #include "linesight/core/error.h"
 #include "linesight/sim/procedural_texture.h"
 
-namespace linesight::sim::detail {
+namespace linesight::sim {
+
+void SensorOptions::Check() const {
+  CheckOption(supersampling >= 1 && supersampling <= 8, "SensorOptions.supersampling",
+              supersampling, "must be in [1, 8]");
+  CheckOption(exposure > 0 && exposure <= 100, "SensorOptions.exposure", exposure,
+              "must be in (0, 100]");
+  CheckOption(right_gain > 0 && right_gain <= 10, "SensorOptions.right_gain", right_gain,
+              "must be in (0, 10]");
+  CheckOption(gamma >= 1 && gamma <= 3, "SensorOptions.gamma", gamma, "must be in [1, 3]");
+  CheckOption(vignetting >= 0 && vignetting <= 0.9, "SensorOptions.vignetting", vignetting,
+              "must be in [0, 0.9]");
+  CheckOption(blur_sigma_px >= 0 && blur_sigma_px <= 10, "SensorOptions.blur_sigma_px",
+              blur_sigma_px, "must be in [0, 10] px");
+  CheckOption(noise_sigma_dn >= 0 && noise_sigma_dn <= 64, "SensorOptions.noise_sigma_dn",
+              noise_sigma_dn, "must be in [0, 64] DN");
+  CheckOption(
+      shot_noise_electrons == 0 || (shot_noise_electrons >= 10 && shot_noise_electrons <= 1e7),
+      "SensorOptions.shot_noise_electrons", shot_noise_electrons,
+      "must be 0 (off) or in [10, 1e7] electrons at full scale");
+}
+
+namespace detail {
 
 cv::Mat EncodeSensorImage(const cv::Mat& linear_bgr, const SensorOptions& sensor, double gain,
                           double cx, double cy, std::uint64_t noise_seed) {
@@ -55,4 +77,5 @@ cv::Mat EncodeSensorImage(const cv::Mat& linear_bgr, const SensorOptions& sensor
   return encoded;
 }
 
-}  // namespace linesight::sim::detail
+}  // namespace detail
+}  // namespace linesight::sim
