@@ -1,3 +1,4 @@
+// Kept whole: zhang, recon and opencv share the solver setup and the refinement steps below.
 #include "linesight/calib/stereo_calibrator.h"
 
 #include <algorithm>
