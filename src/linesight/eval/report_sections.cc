@@ -215,7 +215,7 @@ std::string NoiseSection(const std::vector<EvalStereoResult>& noisy,
                          fmt::join(partial, "; "));
     }
   }
-  // Every scene: the acceptance asks for every method on every scene at every setting.
+  // Every scene: each method on each scene at each setting.
   out += "<details><summary>Per scene (headline error of the scene's set, dense %)</summary>\n\n";
   out += "| set | scene | method |";
   for (const std::string& l : labels) out += " " + l + " |";
