@@ -48,7 +48,7 @@ int RunDisparity(int argc, char** argv) {
     CheckSameSize(left, left_path, right, right_path);
 
     Stopwatch watch;
-    const cv::Mat disparity = matcher->Compute(left, right);
+    const cv::Mat disparity = matcher->Compute(left, right).disparity;
     const double ms = watch.ElapsedMs();
 
     WritePfm(out_path, disparity);

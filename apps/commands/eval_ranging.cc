@@ -153,7 +153,7 @@ MiddleburyCheck RunMiddleburyCheck(const std::filesystem::path& dir,
   mo.threads = base.threads;
   mo.params = RangingMatcherParams(base.method, base.params);  // the chain's settings
   auto matcher = CreateMatcher(base.method.empty() ? DefaultMatcherName() : base.method, mo);
-  const cv::Mat disparity = matcher->Compute(left, right);
+  const cv::Mat disparity = matcher->Compute(left, right).disparity;
   const cv::Mat z = DepthFromDisparity(disparity, g);
   const cv::Mat z_gt = DepthFromDisparity(gt, g);
   std::vector<float> errors;

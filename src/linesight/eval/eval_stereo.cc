@@ -171,7 +171,7 @@ EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
           continue;
         }
         Stopwatch watch;
-        const cv::Mat disparity = matcher->Compute(left, right);
+        const cv::Mat disparity = matcher->Compute(left, right).disparity;
         const double ms = watch.ElapsedMs();
 
         EvalStereoResult result;

@@ -161,7 +161,7 @@ EvalObstaclesReport RunEvalObstacles(const std::vector<StereoScene>& scenes,
         m.params = ParamsForMethod(options.params, method);
         auto matcher = CreateMatcher(method, m);
         Stopwatch watch;
-        const cv::Mat disparity = matcher->Compute(left, right);
+        const cv::Mat disparity = matcher->Compute(left, right).disparity;
         EvalStereoResult r;
         r.ms = watch.ElapsedMs();
         r.set = scene.ref.set;

@@ -10,7 +10,7 @@
 
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/error.h"
-#include "linesight/stereo/algorithm_version.h"
+#include "linesight/stereo/matcher.h"
 
 namespace linesight {
 namespace fs = std::filesystem;
@@ -79,7 +79,7 @@ nlohmann::json MakeResultCacheKey(const StereoScene& scene, const std::string& m
   return {{"set", scene.ref.set},
           {"scene", scene.ref.name},
           {"method", method},
-          {"algorithm_version", MatcherAlgorithmVersion(method)},
+          {"algorithm_version", FindMatcher(method).algorithm_version},
           {"metrics_version", kEvalMetricsVersion},
           {"opencv", CV_VERSION},
           {"settings", settings},

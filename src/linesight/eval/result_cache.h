@@ -3,12 +3,12 @@
 //
 // An entry is one (set, scene, method, noise) cell. Its key holds everything the result depends
 // on: the method's full effective settings (StereoMatcher::Settings), its algorithm version
-// (MatcherAlgorithmVersion, bumped by hand when the method's output changes), the version of the
-// metrics code, the noise setting and seed, and fingerprints of the exact input pair handed to the
-// matcher (noise included), of the ground truth and of every evaluation mask. A result is reused
-// only when the stored key equals the key of the run that asks, field for field. Each entry also
-// records who measured it (commit, machine, UTC date), so that a page built from cached cells can
-// say so.
+// (MatcherInfo::algorithm_version in the matcher registry, bumped by hand when the method's output
+// changes), the version of the metrics code, the noise setting and seed, and fingerprints of the
+// exact input pair handed to the matcher (noise included), of the ground truth and of every
+// evaluation mask. A result is reused only when the stored key equals the key of the run that
+// asks, field for field. Each entry also records who measured it (commit, machine, UTC date), so
+// that a page built from cached cells can say so.
 //
 // Layout: <dir>/<set>/<scene>/<method>/<noise>-<16 hex digits of the key's hash>.json, one JSON
 // file per entry, written atomically (several processes may fill one cache). An unreadable or

@@ -7,7 +7,6 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
-#include "linesight/stereo/isgm.h"
 
 namespace linesight {
 
@@ -109,15 +108,7 @@ RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
                      cv::BORDER_REPLICATE);
   cv::copyMakeBorder(frame.right_rectified.rowRange(band), right_padded, 0, 0, pad, 0,
                      cv::BORDER_REPLICATE);
-  cv::Mat band_disparity, band_checked;
-  if (auto* isgm = dynamic_cast<IsgmMatcher*>(matcher_.get())) {
-    const IsgmResult detailed = isgm->ComputeDetailed(left_padded, right_padded);
-    band_disparity = detailed.disparity;
-    band_checked = detailed.sgm.disparity;
-  } else {
-    band_disparity = matcher_->Compute(left_padded, right_padded);
-    band_checked = band_disparity;
-  }
+  const MatchResult matched = matcher_->Compute(left_padded, right_padded);
   auto unpad = [&](const cv::Mat& padded) {
     cv::Mat full(expected, CV_32FC1, cv::Scalar(kInvalidDisparity));
     padded.colRange(pad, pad + expected.width).copyTo(full.rowRange(band));
@@ -130,9 +121,9 @@ RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
     }
     return full;
   };
-  frame.disparity = unpad(band_disparity);
+  frame.disparity = unpad(matched.disparity);
   frame.checked_disparity =
-      band_checked.data == band_disparity.data ? frame.disparity : unpad(band_checked);
+      matched.IsSameMapAsDisparity() ? frame.disparity : unpad(matched.checked);
   return frame;
 }
 

@@ -94,8 +94,9 @@ struct RangingPipelineOptions {
 struct RangingFrame {
   cv::Mat left_rectified, right_rectified;  // 8-bit, as given (grey or BGR)
   cv::Mat disparity;  // CV_32FC1 px, +inf invalid; rows outside a band are +inf
-  // CV_32FC1 px: the pixels of `disparity` that passed the matcher's consistency checks (isgm: its
-  // SGM stage before plane filling), +inf elsewhere. The same as `disparity` for other matchers.
+  // CV_32FC1 px: the matcher's MatchResult::checked, the pixels that passed its consistency checks
+  // (isgm: its SGM stage before plane filling), +inf elsewhere. The same Mat as `disparity` for the
+  // other matchers.
   cv::Mat checked_disparity;
   // What ranging uses: checked_disparity if RangingPipelineOptions::range_on_checked_disparity.
   const cv::Mat& ranging_disparity(bool checked) const {

@@ -118,14 +118,16 @@ struct GraphCutResult {
   double seconds = 0;       // wall time of the whole computation
 };
 
-// The `gc` method. Not thread-safe (the graph is reused); use one matcher per thread.
+// The `gc` method. Safe to call from several threads at once: every call builds its own graphs (the
+// expansion moves of one call reuse them), and the only threads it runs are its own std::thread
+// for the right view. MatchResult::checked is the disparity itself.
 class GraphCutMatcher final : public StereoMatcher {
  public:
   explicit GraphCutMatcher(const GraphCutOptions& options);
   ~GraphCutMatcher() override;
 
   std::string Name() const override { return "gc"; }
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override;
+  MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override;
   nlohmann::json Settings() const override;
 
   GraphCutResult ComputeDetailed(const cv::Mat& left, const cv::Mat& right);
@@ -135,13 +137,14 @@ class GraphCutMatcher final : public StereoMatcher {
   GraphCutOptions options_;
 };
 
-// Reads GraphCutOptions from MatcherOptions (range, threads) and its --param keys: data
-// (bt|census), color, census_window, truncation, lambda, edge_threshold, edge_multiplier,
-// iterations, order (random|sequential), seed, lr_check, lr_max_diff, fill_occlusions. Throws
-// OptionError for invalid values.
+// Reads GraphCutOptions from MatcherOptions (range, threads) and the --param keys of
+// GraphCutParamDocs. Throws OptionError for invalid values.
 GraphCutOptions ReadGraphCutOptions(const MatcherOptions& options, MatcherParams& params);
 
-// Factory hook used by CreateMatcher("gc", ...).
+// The --param keys ReadGraphCutOptions reads, with GraphCutOptions' defaults.
+std::vector<MatcherParamDoc> GraphCutParamDocs();
+
+// Factory of the registry entry "gc" (matcher.cc).
 std::unique_ptr<StereoMatcher> CreateGraphCutMatcher(const MatcherOptions& options,
                                                      MatcherParams& params);
 

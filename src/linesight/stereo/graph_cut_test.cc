@@ -258,7 +258,7 @@ TEST(GraphCutMatcherTest, RecoversAConstantShift) {
   cv::Mat brighter;
   right.convertTo(brighter, CV_8U, 0.8, 20);
   GraphCutMatcher census(options);
-  EXPECT_EQ(CountDifferent(census.Compute(left, brighter), 5.0f, 5), 0);
+  EXPECT_EQ(CountDifferent(census.Compute(left, brighter).disparity, 5.0f, 5), 0);
 }
 
 // Fronto-parallel step: background at disparity 3, a rectangle in front at 9; independent random
@@ -380,7 +380,7 @@ TEST(GraphCutMatcherTest, LeftRightCheckFindsAndFillsOcclusions) {
   // Filled from the background side: the occluded band gets the background disparity, the map is
   // dense.
   options.fill_occlusions = true;
-  const cv::Mat filled = GraphCutMatcher(options).Compute(scene.left, scene.right);
+  const cv::Mat filled = GraphCutMatcher(options).Compute(scene.left, scene.right).disparity;
   EXPECT_EQ(DisparityDensity(filled), 100.0);
   int wrong = 0;
   for (int y = 0; y < scene.truth.rows; ++y) {
@@ -422,8 +422,9 @@ TEST(GraphCutMatcherTest, RejectsBadInputAndSkipsImpossibleLabels) {
   GraphCutOptions options;
   options.min_disparity = 20;
   options.num_disparities = 4;
-  const cv::Mat none = GraphCutMatcher(options).Compute(cv::Mat::zeros(6, 16, CV_8UC1),
-                                                        cv::Mat::zeros(6, 16, CV_8UC1));
+  const cv::Mat none = GraphCutMatcher(options)
+                           .Compute(cv::Mat::zeros(6, 16, CV_8UC1), cv::Mat::zeros(6, 16, CV_8UC1))
+                           .disparity;
   EXPECT_EQ(DisparityDensity(none), 0.0);
 }
 
@@ -443,7 +444,7 @@ TEST(GraphCutMatcherTest, TsukubaBad1NonOccluded) {
   GraphCutOptions options;
   options.num_disparities = 16;
   options.iterations = 2;
-  const cv::Mat disparity = GraphCutMatcher(options).Compute(left, right);
+  const cv::Mat disparity = GraphCutMatcher(options).Compute(left, right).disparity;
   int evaluated = 0, bad = 0;
   for (int y = 0; y < truth.rows; ++y) {
     for (int x = 0; x < truth.cols; ++x) {

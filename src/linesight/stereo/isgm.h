@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -48,13 +49,17 @@ struct IsgmResult {
   PlaneRefinementStats refinement;
 };
 
-// Not thread-safe (the SGM scratch buffers are reused); use one matcher per thread.
+// The SGM stage runs its own std::threads, the refinement OpenCV's pool sized for the call
+// (ScopedOpenCvThreads). Not thread-safe (the SGM scratch buffers are reused); use one matcher per
+// thread.
 class IsgmMatcher final : public StereoMatcher {
  public:
   explicit IsgmMatcher(const IsgmOptions& options);
 
   std::string Name() const override { return "isgm"; }
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override;
+  // disparity = the refined dense map, checked = the SGM stage's map (IsgmResult's disparity and
+  // sgm.disparity, without SGM's detailed maps).
+  MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override;
   nlohmann::json Settings() const override;
 
   IsgmResult ComputeDetailed(const cv::Mat& left, const cv::Mat& right);
@@ -69,15 +74,14 @@ class IsgmMatcher final : public StereoMatcher {
   SgmMatcher sgm_;
 };
 
-// Reads IsgmOptions from MatcherOptions and --param keys: every sgm key (census_width,
-// census_height, bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel,
-// lr_max_diff, speckle_window, speckle_range, median; defaults from IsgmDefaultSgmOptions) plus
-// superpixel_size, superpixel_compactness, plane_inlier, plane_outlier, plane_min_inlier_ratio,
-// plane_max_slant, two_planes, adopt_planes, snap_inliers, photometric_radius, final_median (0 | 3
-// | 5) (defaults from IsgmDefaultRefinementOptions).
+// Reads IsgmOptions from MatcherOptions and the --param keys of IsgmParamDocs.
 IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params);
 
-// Factory hook used by CreateMatcher("isgm", ...).
+// The --param keys ReadIsgmOptions reads: every sgm key (SgmParamDocs with the defaults of
+// IsgmDefaultSgmOptions) plus the refinement's (defaults from IsgmDefaultRefinementOptions).
+std::vector<MatcherParamDoc> IsgmParamDocs();
+
+// Factory of the registry entry "isgm" (matcher.cc).
 std::unique_ptr<StereoMatcher> CreateIsgmMatcher(const MatcherOptions& options,
                                                  MatcherParams& params);
 

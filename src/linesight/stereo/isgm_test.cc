@@ -102,9 +102,9 @@ TEST(IsgmMatcher, DenseAccurateWithinRangeAndThreadIndependent) {
   MatcherOptions mo;
   mo.num_disparities = 23;  // awkward range: 0..22
   mo.threads = 1;
-  const cv::Mat one = CreateMatcher("isgm", mo)->Compute(left, right);
+  const cv::Mat one = CreateMatcher("isgm", mo)->Compute(left, right).disparity;
   mo.threads = 2;
-  const cv::Mat two = CreateMatcher("isgm", mo)->Compute(left, right);
+  const cv::Mat two = CreateMatcher("isgm", mo)->Compute(left, right).disparity;
   ASSERT_EQ(one.type(), CV_32FC1);
   EXPECT_EQ(std::memcmp(one.data, two.data, one.total() * sizeof(float)), 0);
   int bad = 0, evaluated = 0, bad_inside = 0, inside = 0;
@@ -148,7 +148,7 @@ TEST(IsgmMatcher, TsukubaDenseBad1Nonocc) {
   info >> scale >> ndisp;
   MatcherOptions mo;
   mo.num_disparities = ndisp;
-  const cv::Mat d = CreateMatcher("isgm", mo)->Compute(left, right);
+  const cv::Mat d = CreateMatcher("isgm", mo)->Compute(left, right).disparity;
   int evaluated = 0, bad = 0;
   for (int y = 0; y < d.rows; ++y) {
     for (int x = 0; x < d.cols; ++x) {
@@ -181,17 +181,19 @@ TEST(IsgmMatcher, ComputeReturnsAFreshMapEveryFrame) {
   o.sgm.num_disparities = 24;
   IsgmMatcher isgm(o);
   SgmMatcher sgm(o.sgm);
-  const cv::Mat isgm_a = isgm.Compute(left_a, right_a), sgm_a = sgm.Compute(left_a, right_a);
+  const cv::Mat isgm_a = isgm.Compute(left_a, right_a).disparity,
+                sgm_a = sgm.Compute(left_a, right_a).disparity;
   const cv::Mat isgm_a_copy = isgm_a.clone(), sgm_a_copy = sgm_a.clone();
-  const cv::Mat isgm_b = isgm.Compute(left_b, right_b), sgm_b = sgm.Compute(left_b, right_b);
+  const cv::Mat isgm_b = isgm.Compute(left_b, right_b).disparity,
+                sgm_b = sgm.Compute(left_b, right_b).disparity;
   EXPECT_NE(isgm_a.data, isgm_b.data);
   EXPECT_NE(sgm_a.data, sgm_b.data);
   EXPECT_EQ(cv::norm(isgm_a, isgm_a_copy, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::countNonZero(sgm_a != sgm_a_copy), 0);
   // The frames differ, and the reused buffers give what a fresh matcher gives.
   EXPECT_GT(cv::countNonZero(sgm_a != sgm_b), 0);
-  EXPECT_EQ(cv::norm(isgm_b, IsgmMatcher(o).Compute(left_b, right_b), cv::NORM_INF), 0.0);
-  EXPECT_EQ(cv::countNonZero(sgm_b != SgmMatcher(o.sgm).Compute(left_b, right_b)), 0);
+  EXPECT_EQ(cv::norm(isgm_b, IsgmMatcher(o).Compute(left_b, right_b).disparity, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::countNonZero(sgm_b != SgmMatcher(o.sgm).Compute(left_b, right_b).disparity), 0);
 }
 
 }  // namespace

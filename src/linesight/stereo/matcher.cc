@@ -1,5 +1,6 @@
 #include "linesight/stereo/matcher.h"
 
+#include <algorithm>
 #include <charconv>
 
 #include <fmt/format.h>
@@ -8,7 +9,6 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
-#include "linesight/stereo/algorithm_version.h"
 #include "linesight/stereo/graph_cut.h"
 #include "linesight/stereo/isgm.h"
 #include "linesight/stereo/opencv_matchers.h"
@@ -26,48 +26,84 @@ void MatcherOptions::Check() const {
   CheckOption(threads >= 0, "MatcherOptions.threads", threads, "must be >= 0 (0 = all cores)");
 }
 
-std::vector<std::string> MatcherNames() { return {"bm", "sgbm", "sgbm-wls", "sgm", "isgm", "gc"}; }
+const std::vector<MatcherInfo>& MatcherRegistry() {
+  // The one list of matchers (CONVENTIONS.md §5), in documentation order. An explicit table rather
+  // than self-registering statics, which a static library drops when nothing references them.
+  // algorithm_version: see MatcherInfo before changing a method's output.
+  static const std::vector<MatcherInfo> kRegistry = {
+      {"bm", "OpenCV StereoBM block matching (fast, sparse)", CreateOpenCvBlockMatcher,
+       OpenCvBlockMatcherParamDocs(), /*algorithm_version=*/1, /*thread_safe=*/false},
+      {"sgbm", "OpenCV StereoSGBM semi-global block matching", CreateOpenCvSgbm,
+       OpenCvSgbmParamDocs(), /*algorithm_version=*/1, /*thread_safe=*/false},
+      {"sgbm-wls", "OpenCV StereoSGBM + ximgproc DisparityWLSFilter (dense, edge-aware)",
+       CreateOpenCvSgbmWls, OpenCvSgbmWlsParamDocs(), /*algorithm_version=*/1,
+       /*thread_safe=*/false},
+      {"sgm", "linesight semi-global matching: census cost, 8 or 4 paths, left-right check",
+       CreateSgmMatcher, SgmParamDocs(), /*algorithm_version=*/1, /*thread_safe=*/false},
+      {"isgm", "linesight SGM refined by robust planes in superpixels (100 % dense)",
+       CreateIsgmMatcher, IsgmParamDocs(), /*algorithm_version=*/1, /*thread_safe=*/false},
+      {"gc", "graph cuts: Potts energy by alpha-expansion (the slow global baseline)",
+       CreateGraphCutMatcher, GraphCutParamDocs(), /*algorithm_version=*/1, /*thread_safe=*/true},
+  };
+  return kRegistry;
+}
 
-int MatcherAlgorithmVersion(const std::string& method) {
-  // One line per method; see algorithm_version.h for when to bump. OpenCV's methods (bm, sgbm,
-  // sgbm-wls) depend on the installed OpenCV too, whose version the cache key records separately.
-  static const std::map<std::string, int> kVersions = {{"bm", 1},  {"sgbm", 1}, {"sgbm-wls", 1},
-                                                       {"sgm", 1}, {"isgm", 1}, {"gc", 1}};
-  const auto it = kVersions.find(method);
-  if (it == kVersions.end()) {
-    throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
-                                 fmt::join(MatcherNames(), ", ")));
+const MatcherInfo& FindMatcher(const std::string& method) {
+  for (const MatcherInfo& info : MatcherRegistry()) {
+    if (info.name == method) return info;
   }
-  return it->second;
+  throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
+                               fmt::join(MatcherNames(), ", ")));
+}
+
+std::vector<std::string> MatcherNames() {
+  std::vector<std::string> names;
+  for (const MatcherInfo& info : MatcherRegistry()) names.push_back(info.name);
+  return names;
+}
+
+std::string DefaultMatcherName() {
+  const auto names = MatcherNames();
+  return std::find(names.begin(), names.end(), "isgm") != names.end() ? "isgm" : "sgbm";
+}
+
+std::string MatcherHelp() {
+  std::string text = "Methods (--method) and their parameters (--param key=value):\n";
+  for (const MatcherInfo& info : MatcherRegistry()) {
+    text += fmt::format("  {}: {}\n", info.name, info.description);
+    for (const MatcherParamDoc& p : info.params) {
+      text += fmt::format("    {}={} ({}): {}\n", p.key, p.default_value, p.type, p.meaning);
+    }
+  }
+  return text;
 }
 
 std::unique_ptr<StereoMatcher> CreateMatcher(const std::string& method,
                                              const MatcherOptions& options) {
   options.Check();
-  MatcherParams params(method, options.params);
-  std::unique_ptr<StereoMatcher> matcher;
-  if (method == "bm") {
-    matcher = CreateOpenCvBlockMatcher(options, params);
-  } else if (method == "sgbm") {
-    matcher = CreateOpenCvSgbm(options, params);
-  } else if (method == "sgbm-wls") {
-    matcher = CreateOpenCvSgbmWls(options, params);
-  } else if (method == "sgm") {
-    matcher = CreateSgmMatcher(options, params);
-  } else if (method == "isgm") {
-    matcher = CreateIsgmMatcher(options, params);
-  } else if (method == "gc") {
-    matcher = CreateGraphCutMatcher(options, params);
-  } else {
-    throw UsageError(fmt::format("unknown method '{}' (expected one of: {})", method,
-                                 fmt::join(MatcherNames(), ", ")));
-  }
+  const MatcherInfo& info = FindMatcher(method);
+  MatcherParams params(method, options.params, info.params);
+  std::unique_ptr<StereoMatcher> matcher = info.create(options, params);
+  // Every documented key is read (MatcherParams checks the converse on every read).
+  LS_CHECK_MSG(params.read_keys().size() == info.params.size(),
+               "{} reads {} --param keys but documents {}", method, params.read_keys().size(),
+               info.params.size());
   params.CheckAllUsed();
   return matcher;
 }
 
-MatcherParams::MatcherParams(std::string method, std::map<std::string, std::string> params)
-    : method_(std::move(method)), params_(std::move(params)) {}
+MatcherParams::MatcherParams(std::string method, std::map<std::string, std::string> params,
+                             std::vector<MatcherParamDoc> docs)
+    : method_(std::move(method)), params_(std::move(params)), docs_(std::move(docs)) {}
+
+void MatcherParams::Read(const std::string& key, const std::string& type) {
+  const auto doc = std::find_if(docs_.begin(), docs_.end(),
+                                [&](const MatcherParamDoc& d) { return d.key == key; });
+  LS_CHECK_MSG(doc != docs_.end(), "{} reads the undocumented --param key '{}'", method_, key);
+  LS_CHECK_MSG(doc->type == type, "{}: --param key '{}' is read as {} but documented as {}",
+               method_, key, type, doc->type);
+  known_.insert(key);
+}
 
 namespace {
 template <typename T>
@@ -84,19 +120,19 @@ T ParseNumber(const std::string& method, const std::string& key, const std::stri
 }  // namespace
 
 int MatcherParams::GetInt(const std::string& key, int default_value) {
-  known_.insert(key);
+  Read(key, "int");
   auto it = params_.find(key);
   return it == params_.end() ? default_value : ParseNumber<int>(method_, key, it->second);
 }
 
 double MatcherParams::GetDouble(const std::string& key, double default_value) {
-  known_.insert(key);
+  Read(key, "number");
   auto it = params_.find(key);
   return it == params_.end() ? default_value : ParseNumber<double>(method_, key, it->second);
 }
 
 bool MatcherParams::GetBool(const std::string& key, bool default_value) {
-  known_.insert(key);
+  Read(key, "bool");
   auto it = params_.find(key);
   if (it == params_.end()) return default_value;
   if (it->second == "1" || it->second == "true" || it->second == "on") return true;
@@ -107,7 +143,7 @@ bool MatcherParams::GetBool(const std::string& key, bool default_value) {
 
 std::string MatcherParams::GetString(const std::string& key, const std::string& default_value,
                                      const std::vector<std::string>& allowed) {
-  known_.insert(key);
+  Read(key, allowed.empty() ? "text" : fmt::format("{}", fmt::join(allowed, "|")));
   auto it = params_.find(key);
   if (it == params_.end()) return default_value;
   if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), it->second) == allowed.end()) {
@@ -151,11 +187,6 @@ double DisparityDensity(const cv::Mat& disparity) {
     for (int x = 0; x < disparity.cols; ++x) valid += IsValidDisparity(row[x]);
   }
   return 100.0 * static_cast<double>(valid) / static_cast<double>(disparity.total());
-}
-
-std::string DefaultMatcherName() {
-  const auto names = MatcherNames();
-  return std::find(names.begin(), names.end(), "isgm") != names.end() ? "isgm" : "sgbm";
 }
 
 cv::Mat ToGray8(const cv::Mat& image) {

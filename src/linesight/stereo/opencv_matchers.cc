@@ -1,5 +1,6 @@
 #include "linesight/stereo/opencv_matchers.h"
 
+#include <fmt/format.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/ximgproc/disparity_filter.hpp>
@@ -13,6 +14,23 @@ namespace {
 // OpenCV wants a multiple of 16; we search the next one up and cut the result back to the request.
 int RoundUpTo16(int n) { return (n + 15) / 16 * 16; }
 
+// Defaults of the --param keys (the docs below print them).
+struct BmDefaults {
+  int block = 15, uniqueness = 15, texture = 10, speckle_window = 100, speckle_range = 2,
+      prefilter_cap = 31;
+};
+// OpenCV's stereo_match sample settings for a grey image; p1 and p2 scale with block.
+struct SgbmDefaults {
+  const char* mode = "3way";
+  int block = 5, uniqueness = 10, speckle_window = 100, speckle_range = 2, disp12_max_diff = 1,
+      prefilter_cap = 63;
+  static int P1(int block) { return 8 * block * block; }
+  static int P2(int block) { return 32 * block * block; }
+};
+struct WlsDefaults {
+  double lambda = 8000.0, sigma = 1.5;
+};
+
 void CheckPair(const cv::Mat& left, const cv::Mat& right) {
   if (left.empty() || right.empty()) throw InputError("matcher input image is empty");
   if (left.size() != right.size()) {
@@ -24,12 +42,13 @@ void CheckPair(const cv::Mat& left, const cv::Mat& right) {
 class OpenCvBlockMatcher final : public StereoMatcher {
  public:
   OpenCvBlockMatcher(const MatcherOptions& options, MatcherParams& params) : options_(options) {
-    block_ = params.GetInt("block", 15);
-    uniqueness_ = params.GetInt("uniqueness", 15);
-    texture_ = params.GetInt("texture", 10);
-    speckle_window_ = params.GetInt("speckle_window", 100);
-    speckle_range_ = params.GetInt("speckle_range", 2);
-    prefilter_cap_ = params.GetInt("prefilter_cap", 31);
+    const BmDefaults d;
+    block_ = params.GetInt("block", d.block);
+    uniqueness_ = params.GetInt("uniqueness", d.uniqueness);
+    texture_ = params.GetInt("texture", d.texture);
+    speckle_window_ = params.GetInt("speckle_window", d.speckle_window);
+    speckle_range_ = params.GetInt("speckle_range", d.speckle_range);
+    prefilter_cap_ = params.GetInt("prefilter_cap", d.prefilter_cap);
     CheckOption(block_ >= 5 && block_ <= 255 && block_ % 2 == 1, "bm.block", block_,
                 "must be odd and in [5, 255]");
     CheckOption(uniqueness_ >= 0, "bm.uniqueness", uniqueness_, "must be >= 0");
@@ -50,12 +69,14 @@ class OpenCvBlockMatcher final : public StereoMatcher {
 
   std::string Name() const override { return "bm"; }
 
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
+  MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
     const ScopedOpenCvThreads threads(options_.threads);
     cv::Mat fixed;
     bm_->compute(ToGray8(left), ToGray8(right), fixed);
-    return FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
+    const cv::Mat disparity =
+        FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
+    return {disparity, disparity};
   }
 
   nlohmann::json Settings() const override {
@@ -79,15 +100,16 @@ class OpenCvBlockMatcher final : public StereoMatcher {
 class OpenCvSgbm final : public StereoMatcher {
  public:
   OpenCvSgbm(const MatcherOptions& options, MatcherParams& params) : options_(options) {
-    mode_ = params.GetString("mode", "3way", {"sgbm", "hh", "3way", "hh4"});
-    block_ = params.GetInt("block", 5);
-    p1_ = params.GetInt("p1", 8 * block_ * block_);
-    p2_ = params.GetInt("p2", 32 * block_ * block_);
-    uniqueness_ = params.GetInt("uniqueness", 10);
-    speckle_window_ = params.GetInt("speckle_window", 100);
-    speckle_range_ = params.GetInt("speckle_range", 2);
-    disp12_max_diff_ = params.GetInt("disp12_max_diff", 1);
-    prefilter_cap_ = params.GetInt("prefilter_cap", 63);
+    const SgbmDefaults d;
+    mode_ = params.GetString("mode", d.mode, {"sgbm", "hh", "3way", "hh4"});
+    block_ = params.GetInt("block", d.block);
+    p1_ = params.GetInt("p1", SgbmDefaults::P1(block_));
+    p2_ = params.GetInt("p2", SgbmDefaults::P2(block_));
+    uniqueness_ = params.GetInt("uniqueness", d.uniqueness);
+    speckle_window_ = params.GetInt("speckle_window", d.speckle_window);
+    speckle_range_ = params.GetInt("speckle_range", d.speckle_range);
+    disp12_max_diff_ = params.GetInt("disp12_max_diff", d.disp12_max_diff);
+    prefilter_cap_ = params.GetInt("prefilter_cap", d.prefilter_cap);
     CheckOption(block_ >= 1 && block_ <= 31 && block_ % 2 == 1, "sgbm.block", block_,
                 "must be odd and in [1, 31]");
     CheckOption(p1_ >= 0, "sgbm.p1", p1_, "must be >= 0");
@@ -108,12 +130,14 @@ class OpenCvSgbm final : public StereoMatcher {
   std::string Name() const override { return "sgbm"; }
   const cv::Ptr<cv::StereoSGBM>& matcher() const { return sgbm_; }
 
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
+  MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
     const ScopedOpenCvThreads threads(options_.threads);
     cv::Mat fixed;
     sgbm_->compute(ToGray8(left), ToGray8(right), fixed);
-    return FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
+    const cv::Mat disparity =
+        FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
+    return {disparity, disparity};
   }
 
   nlohmann::json Settings() const override {
@@ -145,8 +169,9 @@ class OpenCvSgbmWls final : public StereoMatcher {
  public:
   OpenCvSgbmWls(const MatcherOptions& options, MatcherParams& params)
       : options_(options), sgbm_(options, params) {
-    lambda_ = params.GetDouble("lambda", 8000.0);
-    sigma_ = params.GetDouble("sigma", 1.5);
+    const WlsDefaults d;
+    lambda_ = params.GetDouble("lambda", d.lambda);
+    sigma_ = params.GetDouble("sigma", d.sigma);
     CheckOption(lambda_ >= 0, "sgbm-wls.lambda", lambda_, "must be >= 0");
     CheckOption(sigma_ > 0, "sgbm-wls.sigma", sigma_, "must be > 0");
     right_matcher_ = cv::ximgproc::createRightMatcher(sgbm_.matcher());
@@ -157,7 +182,7 @@ class OpenCvSgbmWls final : public StereoMatcher {
 
   std::string Name() const override { return "sgbm-wls"; }
 
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override {
+  MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override {
     CheckPair(left, right);
     const ScopedOpenCvThreads threads(options_.threads);
     const cv::Mat left_gray = ToGray8(left), right_gray = ToGray8(right);
@@ -165,7 +190,9 @@ class OpenCvSgbmWls final : public StereoMatcher {
     sgbm_.matcher()->compute(left_gray, right_gray, left_fixed);
     right_matcher_->compute(right_gray, left_gray, right_fixed);
     wls_->filter(left_fixed, left, filtered, right_fixed, cv::Rect(), right);
-    return FixedPointToFloatDisparity(filtered, options_.min_disparity, options_.num_disparities);
+    const cv::Mat disparity =
+        FixedPointToFloatDisparity(filtered, options_.min_disparity, options_.num_disparities);
+    return {disparity, disparity};
   }
 
   nlohmann::json Settings() const override {
@@ -185,6 +212,56 @@ class OpenCvSgbmWls final : public StereoMatcher {
 };
 
 }  // namespace
+
+std::vector<MatcherParamDoc> OpenCvBlockMatcherParamDocs() {
+  const BmDefaults d;
+  return {
+      {"block", "int", fmt::format("{}", d.block), "matched block side (px, odd, 5..255)"},
+      {"uniqueness", "int", fmt::format("{}", d.uniqueness),
+       "uniqueness ratio (%): the winner must beat every other disparity by this margin"},
+      {"texture", "int", fmt::format("{}", d.texture),
+       "minimum texture of a block (sum of prefiltered values); below it no estimate"},
+      {"speckle_window", "int", fmt::format("{}", d.speckle_window),
+       "largest blob of similar disparities removed as a speckle (px); 0 = off"},
+      {"speckle_range", "int", fmt::format("{}", d.speckle_range),
+       "largest disparity step inside one speckle blob (px)"},
+      {"prefilter_cap", "int", fmt::format("{}", d.prefilter_cap),
+       "clip of the normalised prefiltered image (1..63)"},
+  };
+}
+
+std::vector<MatcherParamDoc> OpenCvSgbmParamDocs() {
+  const SgbmDefaults d;
+  return {
+      {"mode", "sgbm|hh|3way|hh4", d.mode,
+       "OpenCV StereoSGBM mode: MODE_SGBM, MODE_HH (full 8 paths), MODE_SGBM_3WAY, MODE_HH4"},
+      {"block", "int", fmt::format("{}", d.block), "matched block side (px, odd, 1..31)"},
+      {"p1", "int", fmt::format("{}", SgbmDefaults::P1(d.block)),
+       "penalty for a disparity change of +-1 px between neighbours; default 8*block^2"},
+      {"p2", "int", fmt::format("{}", SgbmDefaults::P2(d.block)),
+       "penalty for a larger disparity change (> p1); default 32*block^2"},
+      {"uniqueness", "int", fmt::format("{}", d.uniqueness),
+       "uniqueness ratio (%): the winner must beat every other disparity by this margin"},
+      {"speckle_window", "int", fmt::format("{}", d.speckle_window),
+       "largest blob of similar disparities removed as a speckle (px); 0 = off"},
+      {"speckle_range", "int", fmt::format("{}", d.speckle_range),
+       "largest disparity step inside one speckle blob (px)"},
+      {"disp12_max_diff", "int", fmt::format("{}", d.disp12_max_diff),
+       "largest left-right check difference (px); < 0 = no check"},
+      {"prefilter_cap", "int", fmt::format("{}", d.prefilter_cap),
+       "clip of the x-derivative prefilter (>= 1)"},
+  };
+}
+
+std::vector<MatcherParamDoc> OpenCvSgbmWlsParamDocs() {
+  const WlsDefaults d;
+  std::vector<MatcherParamDoc> docs = OpenCvSgbmParamDocs();
+  docs.push_back({"lambda", "number", fmt::format("{}", d.lambda),
+                  "WLS smoothness weight (>= 0): larger = smoother map"});
+  docs.push_back({"sigma", "number", fmt::format("{}", d.sigma),
+                  "WLS colour sigma (> 0): how strongly image edges stop the smoothing"});
+  return docs;
+}
 
 std::unique_ptr<StereoMatcher> CreateOpenCvSgbmWls(const MatcherOptions& options,
                                                    MatcherParams& params) {

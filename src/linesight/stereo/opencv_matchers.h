@@ -1,29 +1,32 @@
 // OpenCV's own matchers (StereoBM, StereoSGBM in its four modes) behind our interface: the
-// baselines every linesight method is measured against.
+// baselines every linesight method is measured against. Factories and parameter docs of the
+// registry entries "bm", "sgbm" and "sgbm-wls" (matcher.cc). They run on OpenCV's thread pool,
+// sized per call (ScopedOpenCvThreads); one object is not safe to call from several threads at
+// once (OpenCV's matchers keep their buffers). MatchResult::checked is the disparity itself.
 #pragma once
 
 #include <memory>
+#include <vector>
 
 #include "linesight/stereo/matcher.h"
 
 namespace linesight {
 
-// Parameters (--param key=value): block (odd, 5..255, default 15), uniqueness (default 15),
-// texture (default 10), speckle_window (default 100), speckle_range (default 2 px),
-// prefilter_cap (default 31).
+// OpenCV StereoBM; its --param keys: OpenCvBlockMatcherParamDocs().
 std::unique_ptr<StereoMatcher> CreateOpenCvBlockMatcher(const MatcherOptions& options,
                                                         MatcherParams& params);
+std::vector<MatcherParamDoc> OpenCvBlockMatcherParamDocs();
 
-// Parameters: mode = sgbm | hh | 3way | hh4 (default 3way), block (odd, default 5), p1 (default
-// 8*block^2), p2 (default 32*block^2), uniqueness (default 10), speckle_window (default 100),
-// speckle_range (default 2), disp12_max_diff (default 1), prefilter_cap (default 63). Defaults are
-// OpenCV's stereo_match sample settings for a grey image.
+// OpenCV StereoSGBM; its --param keys, with OpenCV's stereo_match sample settings for a grey image
+// as defaults: OpenCvSgbmParamDocs().
 std::unique_ptr<StereoMatcher> CreateOpenCvSgbm(const MatcherOptions& options,
                                                 MatcherParams& params);
+std::vector<MatcherParamDoc> OpenCvSgbmParamDocs();
 
-// SGBM (same parameters as above) + ximgproc DisparityWLSFilter with the right-view matcher and
-// confidence. Extra parameters: lambda (default 8000), sigma (colour sigma, default 1.5).
+// SGBM (same parameters) + ximgproc DisparityWLSFilter with the right-view matcher and confidence;
+// its --param keys: OpenCvSgbmWlsParamDocs() (the sgbm keys plus lambda and sigma).
 std::unique_ptr<StereoMatcher> CreateOpenCvSgbmWls(const MatcherOptions& options,
                                                    MatcherParams& params);
+std::vector<MatcherParamDoc> OpenCvSgbmWlsParamDocs();
 
 }  // namespace linesight

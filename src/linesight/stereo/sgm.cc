@@ -7,6 +7,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/core/scoped_threads.h"
@@ -148,13 +150,13 @@ SgmMatcher::SgmMatcher(const SgmOptions& options)
 
 SgmMatcher::~SgmMatcher() = default;
 
-cv::Mat SgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
+MatchResult SgmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) {
   // The intermediate maps stay allocated between frames (no page faults for 7 MB per frame at
   // 752x480); the returned disparity is a fresh buffer every time.
   SgmResult& reused = scratch_->result;
   reused.disparity = cv::Mat();
   Run(left, right, /*detailed=*/false, &reused);
-  return reused.disparity;
+  return {reused.disparity, reused.disparity};
 }
 
 nlohmann::json SgmMatcher::Settings() const {
@@ -405,6 +407,36 @@ SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params,
   o.median = params.GetBool("median", o.median);
   o.Check();
   return o;
+}
+
+std::vector<MatcherParamDoc> SgmParamDocs(const SgmOptions& d) {
+  auto text = [](auto value) { return fmt::format("{}", value); };
+  return {
+      {"census_width", "int", text(d.census_width),
+       "census window width (px, odd, 1..15; width*height - 1 <= 64 bits)"},
+      {"census_height", "int", text(d.census_height), "census window height (px, odd, 1..15)"},
+      {"bt_weight", "int", text(d.bt_weight),
+       "weight of the truncated Birchfield-Tomasi term (eighths of a cost unit per grey level); "
+       "0 = census only"},
+      {"bt_truncation", "int", text(d.bt_truncation),
+       "grey levels at which the Birchfield-Tomasi term saturates (1..255)"},
+      {"paths", "int", text(d.num_paths), "aggregation directions: 4 or 8"},
+      {"p1", "int", text(d.p1), "penalty for a disparity change of +-1 px along a path"},
+      {"p2", "int", text(d.p2), "penalty for a larger disparity change (> p1)"},
+      {"p2_alpha", "int", text(d.p2_gradient_alpha),
+       "P2 adapted to the intensity step: P2 * alpha / (alpha + |dI|); 0 = constant P2"},
+      {"uniqueness", "int", text(d.uniqueness_ratio),
+       "uniqueness ratio (%) against disparities more than 1 px away; 0 = off"},
+      {"subpixel", "none|equiangular|parabola", SubpixelName(d.subpixel),
+       "subpixel fit of the winner (equiangular suits census)"},
+      {"lr_max_diff", "int", text(d.lr_max_diff),
+       "largest left-right difference of the integer winners (px); -1 = no left-right check"},
+      {"speckle_window", "int", text(d.speckle_window),
+       "largest blob of similar disparities removed as a speckle (px); 0 = off"},
+      {"speckle_range", "number", text(d.speckle_range),
+       "largest disparity step inside one speckle blob (px)"},
+      {"median", "bool", d.median ? "true" : "false", "3x3 median over valid neighbours"},
+  };
 }
 
 std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options,

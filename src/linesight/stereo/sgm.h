@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -107,14 +108,15 @@ struct SgmResult {
 // nothing in the pipeline needs it.
 cv::Mat SgmConfidence(const SgmResult& result);
 
-// The `sgm` method. Not thread-safe (scratch buffers are reused); use one matcher per thread.
+// The `sgm` method. Runs its own std::threads (never OpenCV's pool). Not thread-safe (scratch
+// buffers are reused); use one matcher per thread. MatchResult::checked is the disparity itself.
 class SgmMatcher final : public StereoMatcher {
  public:
   explicit SgmMatcher(const SgmOptions& options);
   ~SgmMatcher() override;
 
   std::string Name() const override { return "sgm"; }
-  cv::Mat Compute(const cv::Mat& left, const cv::Mat& right) override;
+  MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override;
   nlohmann::json Settings() const override;
 
   // The whole pipeline with its intermediate products (for refinement stages such as isgm).
@@ -135,15 +137,16 @@ class SgmMatcher final : public StereoMatcher {
   std::unique_ptr<Scratch> scratch_;
 };
 
-// Reads SgmOptions from MatcherOptions (range, threads) and its --param keys: census_width,
-// census_height, bt_weight, bt_truncation, paths, p1, p2, p2_alpha, uniqueness, subpixel
-// (none|equiangular|parabola), lr_max_diff, speckle_window, speckle_range, median; keys not given
-// keep their value in `defaults` (isgm passes its own tuned set). Throws OptionError for invalid
-// values.
+// Reads SgmOptions from MatcherOptions (range, threads) and the --param keys of SgmParamDocs; keys
+// not given keep their value in `defaults` (isgm passes its own tuned set). Throws OptionError for
+// invalid values.
 SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params,
                           const SgmOptions& defaults = SgmOptions());
 
-// Factory hook used by CreateMatcher("sgm", ...).
+// The --param keys ReadSgmOptions reads, with their values in `defaults` as defaults.
+std::vector<MatcherParamDoc> SgmParamDocs(const SgmOptions& defaults = SgmOptions());
+
+// Factory of the registry entry "sgm" (matcher.cc).
 std::unique_ptr<StereoMatcher> CreateSgmMatcher(const MatcherOptions& options,
                                                 MatcherParams& params);
 

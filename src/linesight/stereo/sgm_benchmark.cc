@@ -121,7 +121,7 @@ void BM_SgmEndToEnd(benchmark::State& state) {
   SgmOptions o;
   o.num_disparities = static_cast<int>(state.range(2));
   SgmMatcher matcher(o);
-  for (auto _ : state) benchmark::DoNotOptimize(matcher.Compute(f.left, f.right).data);
+  for (auto _ : state) benchmark::DoNotOptimize(matcher.Compute(f.left, f.right).disparity.data);
   SetItems(state);
 }
 BENCHMARK(BM_SgmEndToEnd)->Args({752, 480, 128})->UseRealTime()->Unit(benchmark::kMillisecond);
@@ -141,7 +141,7 @@ void BM_OpenCvSgbm(benchmark::State& state) {
   options.num_disparities = static_cast<int>(state.range(2));
   options.params["mode"] = state.range(3) == 0 ? "3way" : "hh";
   auto matcher = CreateMatcher("sgbm", options);
-  for (auto _ : state) benchmark::DoNotOptimize(matcher->Compute(f.left, f.right).data);
+  for (auto _ : state) benchmark::DoNotOptimize(matcher->Compute(f.left, f.right).disparity.data);
   SetItems(state);
 }
 BENCHMARK(BM_OpenCvSgbm)->Args({752, 480, 128, 0})->UseRealTime()->Unit(benchmark::kMillisecond);

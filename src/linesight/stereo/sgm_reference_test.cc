@@ -324,7 +324,7 @@ TEST_P(SgmKernelTest, WholePipelineEqualsReferenceForAnyThreadCount) {
   for (const Config& c : Configs()) {
     const Reference& r = CachedReference(c);
     SgmMatcher matcher(OptionsFor(c));
-    const cv::Mat disparity = matcher.Compute(r.left, r.right);
+    const cv::Mat disparity = matcher.Compute(r.left, r.right).disparity;
     ASSERT_EQ(disparity.type(), CV_32FC1);
     int valid = 0;
     for (int y = 0; y < c.height; ++y) {
@@ -338,7 +338,7 @@ TEST_P(SgmKernelTest, WholePipelineEqualsReferenceForAnyThreadCount) {
     // The comparison must not be vacuous: most pixels carry an estimate.
     EXPECT_GT(valid, c.width * c.height / 2) << Describe(c);
     // Reusing the matcher (scratch buffers) gives the same result.
-    const cv::Mat again = matcher.Compute(r.left, r.right);
+    const cv::Mat again = matcher.Compute(r.left, r.right).disparity;
     EXPECT_EQ(cv::norm(disparity != again, cv::NORM_L1), 0) << Describe(c);
   }
 }

@@ -237,9 +237,9 @@ TEST(SgmMatcher, ComputeEqualsComputeDetailedWhateverTheOrder) {
     o.num_disparities = 37;
     SgmMatcher matcher(o);
     SgmMatcher fresh(o);
-    const cv::Mat lean = matcher.Compute(pair.left, pair.right).clone();
+    const cv::Mat lean = matcher.Compute(pair.left, pair.right).disparity.clone();
     const SgmResult detailed = matcher.ComputeDetailed(pair.left, pair.right);
-    const cv::Mat lean_other = matcher.Compute(other.left, other.right).clone();
+    const cv::Mat lean_other = matcher.Compute(other.left, other.right).disparity.clone();
     const cv::Mat fresh_other = fresh.ComputeDetailed(other.left, other.right).disparity;
     EXPECT_EQ(cv::norm(lean != detailed.disparity, cv::NORM_L1), 0) << min_disparity;
     EXPECT_EQ(cv::norm(lean_other != fresh_other, cv::NORM_L1), 0) << min_disparity;
@@ -282,7 +282,7 @@ TEST(SgmAccuracy, NegativeMinDisparityAndOddRange) {
   o.num_disparities = 13;
   o.num_paths = 4;
   SgmMatcher matcher(o);
-  const cv::Mat disparity = matcher.Compute(pair.left, pair.right);
+  const cv::Mat disparity = matcher.Compute(pair.left, pair.right).disparity;
   cv::Mat mask(pair.disparity.size(), CV_8UC1, cv::Scalar(0));
   mask(cv::Rect(16, 0, 160 - 32, 120)).setTo(255);
   const Score s = Evaluate(disparity, pair.disparity, mask);
@@ -306,7 +306,7 @@ TEST(SgmAccuracy, TsukubaBad1Nonocc) {
   SgmOptions o;
   o.num_disparities = 16;
   SgmMatcher matcher(o);
-  const Score s = Evaluate(matcher.Compute(left, right), truth, nonocc);
+  const Score s = Evaluate(matcher.Compute(left, right).disparity, truth, nonocc);
   RecordProperty("bad1_nonocc", std::to_string(s.bad1));
   RecordProperty("density", std::to_string(s.density));
   // Measured with the default settings: 5.42 % (density 97.8 %); published SGM: 3.26 %, OpenCV

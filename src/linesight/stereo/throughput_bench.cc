@@ -147,11 +147,11 @@ nlohmann::json MeasureInChild(const BenchOptions& options, const std::string& me
   }
   auto matcher = CreateBenchMatcher(method, size, options.threads);
   cv::Mat disparity;
-  for (int i = 0; i < options.warmup; ++i) disparity = matcher->Compute(left, right);
+  for (int i = 0; i < options.warmup; ++i) disparity = matcher->Compute(left, right).disparity;
   std::vector<double> ms;
   for (int i = 0; i < options.runs; ++i) {
     Stopwatch watch;
-    disparity = matcher->Compute(left, right);
+    disparity = matcher->Compute(left, right).disparity;
     ms.push_back(watch.ElapsedMs());
   }
   const double density =
