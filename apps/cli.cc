@@ -36,9 +36,10 @@ int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>
 }
 
 void AddParamOption(CLI::App& app, std::vector<std::string>* raw) {
-  app.add_option("--param", *raw,
-                 "method parameter key=value (repeatable, or comma-separated); keys per method in "
-                 "docs/algorithms/")
+  app.add_option(
+         "--param", *raw,
+         "method parameter key=value (repeatable, or comma-separated); `linesight disparity "
+         "--help` lists each method's keys")
       ->delimiter(',');
 }
 

@@ -118,6 +118,20 @@ TEST_F(CliTest, EveryEvalStudyHasHelp) {
   EXPECT_GE(studies, 1);
 }
 
+// The matcher registry as `disparity --help` prints it: every method, every key with its default.
+TEST_F(CliTest, DisparityHelpListsEveryMethodAndItsParameters) {
+  const RunResult r = Run("disparity --help");
+  ASSERT_EQ(r.exit_code, 0);
+  for (const char* method : {"bm", "sgbm", "sgbm-wls", "sgm", "isgm", "gc"}) {
+    EXPECT_NE(r.out.find("\n  " + std::string(method) + ": "), std::string::npos) << method;
+  }
+  for (const char* key : {"    prefilter_cap=31 (int): ", "    mode=3way (sgbm|hh|3way|hh4): ",
+                          "    sigma=1.5 (number): ", "    paths=4 (int): ",
+                          "    superpixel_size=13 (int): ", "    fill_occlusions=true (bool): "}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  }
+}
+
 TEST_F(CliTest, UnknownCommandIsUsageError) {
   const RunResult r = Run("frobnicate");
   EXPECT_EQ(r.exit_code, 2);
@@ -183,7 +197,11 @@ TEST_F(CliTest, UnknownMethodAndFlagAndParamAreUsageErrors) {
   EXPECT_NE(r.err.find("--bogus"), std::string::npos) << r.err;
   r = Run("disparity --method sgbm --param nonsense=1" + io);
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("nonsense"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown parameter 'nonsense' for method 'sgbm' (valid: block, "
+                       "disp12_max_diff, mode, p1, p2, prefilter_cap, speckle_range, "
+                       "speckle_window, uniqueness)"),
+            std::string::npos)
+      << r.err;
   r = Run("disparity --method sgbm --num-disp 0" + io);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("num_disparities = 0"), std::string::npos) << r.err;

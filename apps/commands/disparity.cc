@@ -32,6 +32,7 @@ int RunDisparity(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--threads", threads, "worker threads (0 = all cores)")->capture_default_str();
   AddParamOption(app, &raw_params);
+  app.footer(MatcherHelp());
   app.add_option("--out", out_path, "disparity output, PFM (float px, inf = invalid)")->required();
   app.add_option("--color", color_path, "colour-mapped disparity PNG for people");
   app.add_option("--kitti", kitti_path, "KITTI 16-bit PNG (value = round(d*256), 0 = invalid)");

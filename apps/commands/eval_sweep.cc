@@ -34,7 +34,8 @@ int RunEvalSweep(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--methods", methods,
-                 "methods with a defined study: sgbm, sgbm-wls, bm, isgm, sgm, gc")
+                 fmt::format("methods with a defined study: {}",
+                             fmt::join(MethodsWithDefaultSweep(), ", ")))
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--max-scenes", max_scenes, "use at most this many scenes (0 = all)")

@@ -16,6 +16,7 @@
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/ranging/ranging.h"
 #include "linesight/server/base_station.h"
+#include "linesight/stereo/matcher.h"
 
 namespace linesight::cli {
 namespace {
@@ -49,7 +50,9 @@ int RunServe(int argc, char** argv) {
   app.add_flag("--no-auto", no_auto, "do not find obstacles automatically (only the ROIs)");
   app.add_flag("--rectified", options.pipeline.input_rectified,
                "the frames are already rectified (P1 P2 Q as given)");
-  app.add_option("--method", options.pipeline.method, "matcher (default isgm)");
+  app.add_option("--method", options.pipeline.method,
+                 fmt::format("matcher: {} (default {})", fmt::join(MatcherNames(), ", "),
+                             DefaultMatcherName()));
   AddParamOption(app, &raw_params);
   app.add_option("--min-depth", options.pipeline.min_depth_m, "working range: nearest depth (m)")
       ->capture_default_str();

@@ -5,6 +5,7 @@
 #include <set>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/error.h"
@@ -86,6 +87,14 @@ std::vector<SweepParameter> DefaultSweepParameters(const std::string& method) {
   return {};
 }
 
+std::vector<std::string> MethodsWithDefaultSweep() {
+  std::vector<std::string> methods;
+  for (const std::string& method : MatcherNames()) {
+    if (!DefaultSweepParameters(method).empty()) methods.push_back(method);
+  }
+  return methods;
+}
+
 void SweepOptions::Check() const {
   CheckOption(!methods.empty() || !parameters.empty(), "SweepOptions.methods", "(empty)",
               "name at least one method");
@@ -107,10 +116,8 @@ std::vector<SweepParameter> EffectiveParameters(const SweepOptions& options) {
   for (const std::string& method : options.methods) {
     const auto params = DefaultSweepParameters(method);
     if (params.empty()) {
-      throw UsageError(
-          fmt::format("no parameter study is defined for method '{}' (sgbm, sgbm-wls, bm, "
-                      "isgm, sgm, gc have one)",
-                      method));
+      throw UsageError(fmt::format("no parameter study is defined for method '{}' ({} have one)",
+                                   method, fmt::join(MethodsWithDefaultSweep(), ", ")));
     }
     out.insert(out.end(), params.begin(), params.end());
   }
@@ -221,7 +228,7 @@ SweepReport RunSweep(const std::vector<SceneRef>& scenes, const SweepOptions& op
       if (it == cache.end()) {
         auto matcher = CreateMatcher(method, matcher_options(job.settings, &scene));
         Stopwatch watch;
-        const cv::Mat disparity = matcher->Compute(scene.left, scene.right);
+        const cv::Mat disparity = matcher->Compute(scene.left, scene.right).disparity;
         const double ms = watch.ElapsedMs();
         EvalStereoResult result;
         result.set = ref.set;

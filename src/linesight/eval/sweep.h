@@ -39,6 +39,8 @@ struct SweepParameter {
 
 // The study's parameters for `method` (see the file comment); empty for an unknown method.
 std::vector<SweepParameter> DefaultSweepParameters(const std::string& method);
+// The registered matchers (MatcherNames) that have a default study, in registry order.
+std::vector<std::string> MethodsWithDefaultSweep();
 
 struct SweepOptions {
   std::vector<std::string> methods = {"sgbm", "sgbm-wls", "isgm"};  // factory names

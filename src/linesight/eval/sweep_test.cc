@@ -46,6 +46,7 @@ TEST(SweepTest, EveryDefaultSweepValueIsAValidSetting) {
       }
     }
   }
+  EXPECT_EQ(MethodsWithDefaultSweep(), MatcherNames());  // every matcher has a study
   const auto isgm = DefaultSweepParameters("isgm");
   EXPECT_EQ(isgm.back().key, "plane_inlier");
   EXPECT_GE(isgm.back().values.size(), 4u);
