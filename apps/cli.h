@@ -29,14 +29,14 @@ int RunCommand(CLI::App& app, int argc, char** argv, const std::function<void()>
 
 // Adds the --param key=value option (repeatable) and returns where the parsed values go.
 void AddParamOption(CLI::App& app, std::vector<std::string>* raw);
-// "p1=8,p2=32" / ["p1=8","p2=32"] -> {p1: 8, p2: 32}; throws UsageError for an entry without '='.
+// "p1=8,p2=32" / ["p1=8","p2=32"] -> {p1: 8, p2: 32} (ParseKeyValues); throws UsageError for an
+// entry without '='.
 std::map<std::string, std::string> ParseParams(const std::vector<std::string>& raw);
 
-// --ranging key=value settings of the ranging chain (eval ranging, eval plates); Apply throws
-// UsageError naming an unknown key or a value that is not a number.
+// Adds the --ranging key=value option (repeatable) of the ranging chain's settings (range, eval
+// ranging, eval plates), and their table (RangingSettingsTable) to the help's footer. The values
+// go to linesight::ApplyRangingSettings("--ranging", raw, &options).
 void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw);
-void ApplyRangingSettings(const std::vector<std::string>& settings,
-                          RangingPipelineOptions* options);
 
 // Adds --source and the capture options (--width --height --fps --loop --synthetic-*) of
 // `serve` and `acquire`.

@@ -11,6 +11,7 @@
 #include "linesight/core/error.h"
 #include "linesight/core/progress.h"
 #include "linesight/eval/plate_study.h"
+#include "linesight/ranging/ranging_settings.h"
 #include "linesight/stereo/matcher.h"
 
 namespace linesight::cli {
@@ -72,7 +73,7 @@ int RunEvalPlates(int argc, char** argv) {
     options.texture_dir = texture_dir;
     options.save_dir = save_dir;
     options.pipeline.params = ParseParams(raw_params);
-    ApplyRangingSettings(ranging_settings, &options.pipeline);
+    ApplyRangingSettings("--ranging", ranging_settings, &options.pipeline);
     options.Check();
     ProgressBar progress(static_cast<int64_t>(options.shapes.size() * options.textures.size() *
                                               options.distances.size()) *

@@ -31,6 +31,7 @@
 #include "linesight/io/json_io.h"
 #include "linesight/io/pfm.h"
 #include "linesight/ranging/pipeline.h"
+#include "linesight/ranging/ranging_settings.h"
 #include "linesight/sim/power_line_scene.h"
 
 namespace linesight::cli {
@@ -437,7 +438,7 @@ int RunEvalRanging(int argc, char** argv) {
   return RunCommand(app, argc, argv, [&] {
     if (runs < 1) throw UsageError("--runs must be >= 1");
     options.params = ParseParams(raw_params);
-    ApplyRangingSettings(ranging_settings, &options);
+    ApplyRangingSettings("--ranging", ranging_settings, &options);
     const std::vector<double> distances = ParseDoubles(distances_text, "--distances");
     std::vector<sim::ObstacleType> types;
     std::vector<std::string> type_names;

@@ -14,6 +14,7 @@
 #include "linesight/io/pfm.h"
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/ranging/pipeline.h"
+#include "linesight/ranging/ranging_settings.h"
 
 namespace linesight::cli {
 
@@ -52,7 +53,7 @@ int RunRange(int argc, char** argv) {
   app.add_option("--disparity-out", disparity_out, "also write the disparity (PFM)");
   app.add_option("--json", json_path, "report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {
-    ApplyRangingSettings(ranging_settings, &options);
+    ApplyRangingSettings("--ranging", ranging_settings, &options);
     if (roi_texts.empty() && !automatic)
       throw UsageError("give at least one --roi x,y,w,h or --auto");
     std::vector<cv::Rect> rois;

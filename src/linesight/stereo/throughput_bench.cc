@@ -17,6 +17,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/core/key_value.h"
 #include "linesight/core/timer.h"
 #include "linesight/stereo/matcher.h"
 #include "linesight/stereo/sgm.h"
@@ -76,23 +77,17 @@ void SplitBenchMethod(const std::string& spec, std::string* method,
   const size_t colon = spec.find(':');
   *method = spec.substr(0, colon);
   if (method->empty()) throw UsageError(fmt::format("bench method '{}': no matcher name", spec));
-  size_t begin = colon;
-  while (begin != std::string::npos) {
-    const size_t end = spec.find(':', begin + 1);
-    const std::string item =
-        spec.substr(begin + 1, end == std::string::npos ? end : end - begin - 1);
-    const size_t eq = item.find('=');
-    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size()) {
-      throw UsageError(fmt::format(
-          "bench method '{}': '{}' is not key=value (expected NAME[:key=value...], e.g. "
-          "isgm:paths=8)",
-          spec, item));
+  if (colon == std::string::npos) return;
+  KeyValueSyntax syntax;
+  syntax.separator = ':';
+  syntax.allow_empty_value = false;
+  syntax.allow_repeats = false;
+  syntax.form = "key=value (NAME[:key=value...], e.g. isgm:paths=8)";
+  const std::string flag = fmt::format("bench method '{}', item", spec);
+  for (auto& [key, value] : ParseKeyValues(flag, {spec.substr(colon + 1)}, syntax)) {
+    if (!params->emplace(key, value).second) {
+      throw UsageError(fmt::format("{} '{}': set twice", flag, key));
     }
-    if (!params->emplace(item.substr(0, eq), item.substr(eq + 1)).second) {
-      throw UsageError(
-          fmt::format("bench method '{}': '{}' is set twice", spec, item.substr(0, eq)));
-    }
-    begin = end;
   }
 }
 
