@@ -43,9 +43,7 @@ void Log(std::FILE* log, const std::string& text) {
 // The true box lives in the renderer's rectified frame; the estimated calibration rectifies
 // slightly differently, so the ROI gets a margin.
 cv::Rect DilateRoi(const cv::Rect& box, cv::Size image) {
-  const int mx = std::max(6, box.width / 6), my = std::max(6, box.height / 6);
-  cv::Rect roi(box.x - mx, box.y - my, box.width + 2 * mx, box.height + 2 * my);
-  return roi & cv::Rect(0, 0, image.width, image.height);
+  return GrowRoiByPixels(box, std::max(6, box.width / 6), std::max(6, box.height / 6), image);
 }
 
 calib::StereoCalibrationResult CalibrateFromBoards(const DemoOptions& options, const fs::path& dir,

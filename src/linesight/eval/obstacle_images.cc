@@ -11,6 +11,7 @@
 #include "linesight/core/timer.h"
 #include "linesight/eval/metrics.h"
 #include "linesight/eval/plot.h"
+#include "linesight/ranging/ranging.h"
 #include "linesight/stereo/matcher.h"
 
 namespace linesight {
@@ -28,9 +29,7 @@ ObstacleCropGeometry ObstacleCropFor(const cv::Mat& ground_truth, const cv::Rect
                     box.height, box.x, box.y, image.width, image.height));
   }
   ObstacleCropGeometry g;
-  g.evaluation_box = cv::Rect(box.x - margin_px, box.y - margin_px, box.width + 2 * margin_px,
-                              box.height + 2 * margin_px) &
-                     image;
+  g.evaluation_box = GrowRoiByPixels(box, margin_px, margin_px, image.size());
   double max_gt = 0;
   const cv::Mat gt = ground_truth(g.evaluation_box);
   for (int y = 0; y < gt.rows; ++y) {

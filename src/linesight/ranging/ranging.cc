@@ -497,11 +497,15 @@ nlohmann::json RangeResultToJson(const RangeResult& result) {
   return j;
 }
 
-cv::Rect GrowRoi(const cv::Rect& box, cv::Size image_size, double fraction, int margin_px) {
-  const int grow_x = static_cast<int>(fraction * box.width) + margin_px;
-  const int grow_y = static_cast<int>(fraction * box.height) + margin_px;
-  return cv::Rect(box.x - grow_x, box.y - grow_y, box.width + 2 * grow_x, box.height + 2 * grow_y) &
+cv::Rect GrowRoiByPixels(const cv::Rect& box, int grow_x_px, int grow_y_px, cv::Size image_size) {
+  return cv::Rect(box.x - grow_x_px, box.y - grow_y_px, box.width + 2 * grow_x_px,
+                  box.height + 2 * grow_y_px) &
          cv::Rect(cv::Point(0, 0), image_size);
+}
+
+cv::Rect GrowRoi(const cv::Rect& box, cv::Size image_size, double fraction, int margin_px) {
+  return GrowRoiByPixels(box, static_cast<int>(fraction * box.width) + margin_px,
+                         static_cast<int>(fraction * box.height) + margin_px, image_size);
 }
 
 RangeRunStats SummariseRangeRuns(const std::vector<RangeResult>& results,

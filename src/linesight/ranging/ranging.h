@@ -154,6 +154,9 @@ RangeResult RangeObstacle(const cv::Mat& disparity, const StereoCalibration& cal
 void CheckRoi(const cv::Rect& roi, cv::Size image_size);
 // "x,y,w,h" -> cv::Rect; throws UsageError naming the text.
 cv::Rect ParseRoi(const std::string& text);
+// `box` grown by grow_x_px on the left and right and grow_y_px above and below, clipped to the
+// image.
+cv::Rect GrowRoiByPixels(const cv::Rect& box, int grow_x_px, int grow_y_px, cv::Size image_size);
 // The ROI the accuracy studies range: `box` grown by `fraction` of its size plus `margin_px` on
 // every side, clipped to the image.
 cv::Rect GrowRoi(const cv::Rect& box, cv::Size image_size, double fraction = 0.15,

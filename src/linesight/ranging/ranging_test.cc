@@ -66,6 +66,15 @@ TEST(GrowRoiTest, GrowsByFractionAndMarginAndClips) {
             cv::Rect(10, 10, 10, 10));
 }
 
+TEST(GrowRoiTest, GrowsByPixelsPerAxisAndClips) {
+  EXPECT_EQ(GrowRoiByPixels(cv::Rect(200, 100, 100, 40), 6, 3, cv::Size(752, 480)),
+            cv::Rect(194, 97, 112, 46));
+  // Clipped on every side that leaves the image; a box outside it grows into an empty ROI.
+  EXPECT_EQ(GrowRoiByPixels(cv::Rect(2, 1, 748, 478), 4, 4, cv::Size(752, 480)),
+            cv::Rect(0, 0, 752, 480));
+  EXPECT_TRUE(GrowRoiByPixels(cv::Rect(900, 10, 10, 10), 4, 4, cv::Size(752, 480)).empty());
+}
+
 TEST(SummariseRangeRunsTest, MeanSpreadCoverageAndFailures) {
   std::vector<RangeResult> results(4);
   const std::vector<double> truths = {2.0, 2.0, 4.0, 4.0};
