@@ -18,6 +18,7 @@
 #include "linesight/core/error.h"
 #include "linesight/io/disparity_io.h"
 #include "linesight/io/image_io.h"
+#include "linesight/io/middlebury_calib.h"
 #include "linesight/io/pfm.h"
 
 namespace linesight {
@@ -168,69 +169,12 @@ Middlebury2001Info ReadMiddlebury2001Info(const fs::path& path) {
   return info;
 }
 
-// Middlebury 2014 / ETH3D calib.txt: "key=value" lines; cam0=[f 0 cx; 0 f cy; 0 0 1]; baseline in
-// mm.
-struct CalibTxt {
-  double focal_px = 0, doffs_px = 0, baseline_mm = 0;
-  int num_disparities = 0;  // 0 if absent
-};
-
-double ParseCalibNumber(const fs::path& path, const std::string& key, const std::string& text) {
-  std::istringstream in(text);
-  double value = 0;
-  if (!(in >> value) || !std::isfinite(value)) {
-    throw InputError(fmt::format("{}: '{}={}' is not a number", path.string(), key, text));
-  }
-  return value;
-}
-
-CalibTxt ReadCalibTxt(const fs::path& path) {
+// Middlebury 2014 / ETH3D calib.txt (io/middlebury_calib.h).
+MiddleburyCalib ReadCalibTxt(const fs::path& path) {
   RequireFile(
       path,
       "calib.txt (Middlebury 2014 / ETH3D layout: cam0=[f 0 cx; 0 f cy; 0 0 1], doffs, baseline)");
-  std::istringstream in(ReadTextFile(path));
-  std::map<std::string, std::string> values;
-  for (std::string line; std::getline(in, line);) {
-    const auto eq = line.find('=');
-    if (eq == std::string::npos) continue;
-    std::string key = line.substr(0, eq);
-    key.erase(
-        std::remove_if(key.begin(), key.end(), [](unsigned char c) { return std::isspace(c); }),
-        key.end());
-    values[key] = line.substr(eq + 1);
-  }
-  auto require = [&](const char* key) -> const std::string& {
-    const auto it = values.find(key);
-    if (it == values.end()) {
-      throw InputError(fmt::format(
-          "{}: field '{}' is missing (expected Middlebury calib.txt layout)", path.string(), key));
-    }
-    return it->second;
-  };
-  CalibTxt calib;
-  std::string cam0 = require("cam0");
-  std::replace_if(
-      cam0.begin(), cam0.end(), [](char c) { return c == '[' || c == ']' || c == ';'; }, ' ');
-  std::istringstream cam_in(cam0);
-  if (!(cam_in >> calib.focal_px) || !std::isfinite(calib.focal_px) || calib.focal_px <= 0) {
-    throw InputError(fmt::format(
-        "{}: field 'cam0' must be a 3x3 matrix [f 0 cx; 0 f cy; 0 0 1] with f > 0", path.string()));
-  }
-  calib.doffs_px = ParseCalibNumber(path, "doffs", require("doffs"));
-  calib.baseline_mm = ParseCalibNumber(path, "baseline", require("baseline"));
-  if (calib.baseline_mm <= 0) {
-    throw InputError(fmt::format("{}: field 'baseline' must be positive (mm), got {}",
-                                 path.string(), calib.baseline_mm));
-  }
-  if (values.count("ndisp")) {
-    const double ndisp = ParseCalibNumber(path, "ndisp", values["ndisp"]);
-    if (ndisp < 1 || ndisp != std::floor(ndisp)) {
-      throw InputError(fmt::format("{}: field 'ndisp' must be a positive integer, got {}",
-                                   path.string(), values["ndisp"]));
-    }
-    calib.num_disparities = static_cast<int>(ndisp);
-  }
-  return calib;
+  return ReadMiddleburyCalib(path);
 }
 
 // Middlebury 2005/2006 dmin.txt: one integer, the full-size disparity offset.
@@ -406,7 +350,7 @@ void LoadMiddlebury2014OrEth3d(StereoScene& scene) {
   } else {
     scene.masks["nonocc"] = scene.masks["all"].clone();  // ETH3D: no occlusion information
   }
-  const CalibTxt calib = ReadCalibTxt(dir / "calib.txt");
+  const MiddleburyCalib calib = ReadCalibTxt(dir / "calib.txt");
   scene.focal_px = calib.focal_px;
   scene.doffs_px = calib.doffs_px;
   scene.baseline_m = calib.baseline_mm / 1000.0;
