@@ -2,8 +2,6 @@
 
 #include <cmath>
 
-#include <Eigen/Dense>
-
 #include "linesight/core/error.h"
 
 namespace linesight::calib {
@@ -12,47 +10,11 @@ bool Unproject(const double* intrinsics, const double* pixel, double* normalized
                double tolerance_px) {
   const double xd = (pixel[0] - intrinsics[kCx]) / intrinsics[kFx];
   const double yd = (pixel[1] - intrinsics[kCy]) / intrinsics[kFy];
-  double x, y;
-  UndistortNormalizedFixedPoint(intrinsics, xd, yd, &x, &y, 10);
-  // Gauss-Newton on pixel(x, y) = observed, with a central-difference Jacobian of the forward
-  // model.
-  bool converged = false;
-  for (int iteration = 0; iteration < 20; ++iteration) {
-    double point[3] = {x, y, 1.0};
-    double predicted[2];
-    Project(intrinsics, point, predicted);
-    const Eigen::Vector2d residual(predicted[0] - pixel[0], predicted[1] - pixel[1]);
-    if (residual.norm() < tolerance_px) {
-      converged = true;
-      break;
-    }
-    Eigen::Matrix2d jacobian;
-    for (int c = 0; c < 2; ++c) {
-      const double h = 1e-7;
-      double plus[3] = {x, y, 1.0};
-      double minus[3] = {x, y, 1.0};
-      plus[c] += h;
-      minus[c] -= h;
-      double p_plus[2], p_minus[2];
-      Project(intrinsics, plus, p_plus);
-      Project(intrinsics, minus, p_minus);
-      jacobian(0, c) = (p_plus[0] - p_minus[0]) / (2 * h);
-      jacobian(1, c) = (p_plus[1] - p_minus[1]) / (2 * h);
-    }
-    const Eigen::Vector2d step = jacobian.partialPivLu().solve(residual);
-    if (!step.allFinite()) break;
-    x -= step[0];
-    y -= step[1];
-  }
-  normalized[0] = x;
-  normalized[1] = y;
-  if (!converged) {
-    double point[3] = {x, y, 1.0};
-    double predicted[2];
-    Project(intrinsics, point, predicted);
-    converged = std::hypot(predicted[0] - pixel[0], predicted[1] - pixel[1]) < tolerance_px;
-  }
-  return converged;
+  UndistortNormalized(intrinsics, xd, yd, &normalized[0], &normalized[1]);
+  const double point[3] = {normalized[0], normalized[1], 1.0};
+  double predicted[2];
+  if (!Project(intrinsics, point, predicted)) return false;
+  return std::hypot(predicted[0] - pixel[0], predicted[1] - pixel[1]) < tolerance_px;
 }
 
 cv::Mat CameraIntrinsics::CameraMatrix() const {

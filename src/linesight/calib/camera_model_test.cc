@@ -69,6 +69,21 @@ TEST(CameraModel, UnprojectRoundTrip) {
   }
 }
 
+TEST(CameraModel, UndistortInvertsDistortToMachinePrecision) {
+  for (bool rational : {false, true}) {
+    const CameraIntrinsics camera = TestCamera(rational);
+    for (double x = -0.55; x <= 0.55; x += 0.05) {
+      for (double y = -0.4; y <= 0.4; y += 0.05) {
+        double xd, yd, xu, yu;
+        DistortNormalized(camera.params.data(), x, y, &xd, &yd);
+        ASSERT_TRUE(UndistortNormalized(camera.params.data(), xd, yd, &xu, &yu)) << x << "," << y;
+        EXPECT_NEAR(xu, x, 1e-14);
+        EXPECT_NEAR(yu, y, 1e-14);
+      }
+    }
+  }
+}
+
 TEST(CameraModel, UnprojectMatchesCvUndistortPoints) {
   const CameraIntrinsics camera = TestCamera(false);
   std::vector<cv::Point2d> pixels = {{20, 30}, {400, 300}, {780, 580}, {100, 500}};
