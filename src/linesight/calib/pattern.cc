@@ -299,37 +299,66 @@ int StereoDetections::BothCount() const {
                                         [](auto& p) { return p.left.found && p.right.found; }));
 }
 
+namespace {
+
+// One pair's detections into `out`, after the size checks of DetectStereoPairs; `left_name` and
+// `right_name` name the images in errors.
+void DetectPair(const cv::Mat& left, const std::string& left_name, const cv::Mat& right,
+                const std::string& right_name, const std::string& first_name,
+                const PatternSpec& spec, const DetectionOptions& options, StereoDetections* out) {
+  CheckSameSize(left, left_name, right, right_name);
+  if (out->pairs.empty()) {
+    out->image_size = left.size();
+  } else if (left.size() != out->image_size) {
+    throw InputError(fmt::format("{} is {}x{} but {} is {}x{}; all images must have one size",
+                                 left_name, left.cols, left.rows, first_name, out->image_size.width,
+                                 out->image_size.height));
+  }
+  PairDetection pair;
+  pair.left = DetectPattern(left, spec, options);
+  pair.right = DetectPattern(right, spec, options);
+  out->pairs.push_back(std::move(pair));
+}
+
+void CheckPairCounts(size_t left, size_t right) {
+  if (left != right) {
+    throw InputError(
+        fmt::format("{} left images but {} right images; they must pair up", left, right));
+  }
+}
+
+}  // namespace
+
+StereoDetections DetectStereoImages(const std::vector<cv::Mat>& left_gray,
+                                    const std::vector<cv::Mat>& right_gray, const PatternSpec& spec,
+                                    const DetectionOptions& options) {
+  options.Check();
+  CheckPairCounts(left_gray.size(), right_gray.size());
+  StereoDetections out;
+  for (size_t i = 0; i < left_gray.size(); ++i) {
+    DetectPair(left_gray[i], fmt::format("left image {}", i), right_gray[i],
+               fmt::format("right image {}", i), "left image 0", spec, options, &out);
+  }
+  return out;
+}
+
 StereoDetections DetectStereoPairs(const std::vector<std::filesystem::path>& left_paths,
                                    const std::vector<std::filesystem::path>& right_paths,
                                    const PatternSpec& spec, const DetectionOptions& options,
                                    bool show_progress) {
   options.Check();
-  if (left_paths.size() != right_paths.size()) {
-    throw InputError(fmt::format("{} left images but {} right images; they must pair up",
-                                 left_paths.size(), right_paths.size()));
-  }
+  CheckPairCounts(left_paths.size(), right_paths.size());
   StereoDetections out;
   ProgressBar progress(static_cast<int64_t>(left_paths.size()), "detecting",
                        show_progress && StderrIsTerminal());
   for (size_t i = 0; i < left_paths.size(); ++i) {
     const cv::Mat left = ReadImage(left_paths[i], ImageColor::kGray);
     const cv::Mat right = ReadImage(right_paths[i], ImageColor::kGray);
-    CheckSameSize(left, left_paths[i], right, right_paths[i]);
-    if (i == 0) {
-      out.image_size = left.size();
-    } else if (left.size() != out.image_size) {
-      throw InputError(fmt::format("{} is {}x{} but {} is {}x{}; all images must have one size",
-                                   left_paths[i].string(), left.cols, left.rows,
-                                   left_paths[0].string(), out.image_size.width,
-                                   out.image_size.height));
-    }
-    PairDetection pair;
-    pair.left_path = left_paths[i];
-    pair.right_path = right_paths[i];
-    pair.left = DetectPattern(left, spec, options);
-    pair.right = DetectPattern(right, spec, options);
+    DetectPair(left, left_paths[i].string(), right, right_paths[i].string(), left_paths[0].string(),
+               spec, options, &out);
+    out.pairs.back().left_path = left_paths[i];
+    out.pairs.back().right_path = right_paths[i];
     progress.Advance(1, left_paths[i].filename().string());
-    out.pairs.push_back(std::move(pair));
   }
   progress.Finish();
   return out;

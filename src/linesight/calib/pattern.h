@@ -111,6 +111,13 @@ struct StereoDetections {
   int BothCount() const;
 };
 
+// Detects every pair of 8-bit grey images (already in memory; the pairs' paths stay empty).
+// Throws InputError when the counts differ or the sizes differ between left and right or across
+// pairs.
+StereoDetections DetectStereoImages(const std::vector<cv::Mat>& left_gray,
+                                    const std::vector<cv::Mat>& right_gray, const PatternSpec& spec,
+                                    const DetectionOptions& options);
+
 // Reads and detects every pair (progress bar on stderr). Throws InputError when the counts differ,
 // an image cannot be read, or the sizes differ between left and right or across pairs.
 StereoDetections DetectStereoPairs(const std::vector<std::filesystem::path>& left_paths,

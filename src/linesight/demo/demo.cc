@@ -6,9 +6,6 @@
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
-#include "linesight/calib/calibration_report.h"
-#include "linesight/calib/pattern.h"
-#include "linesight/calib/stereo_calibrator.h"
 #include "linesight/core/error.h"
 #include "linesight/core/timer.h"
 #include "linesight/geometry/point_cloud.h"
@@ -18,6 +15,7 @@
 #include "linesight/io/pfm.h"
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/ranging/pipeline.h"
+#include "linesight/sim/board_calibration.h"
 
 namespace linesight {
 namespace fs = std::filesystem;
@@ -46,31 +44,19 @@ cv::Rect DilateRoi(const cv::Rect& box, cv::Size image) {
   return GrowRoiByPixels(box, std::max(6, box.width / 6), std::max(6, box.height / 6), image);
 }
 
-calib::StereoCalibrationResult CalibrateFromBoards(const DemoOptions& options, const fs::path& dir,
-                                                   nlohmann::json* json, StereoCalibration* out,
-                                                   std::FILE* log) {
+// Calibrates from rendered boards (sim::CalibrateFromRenderedBoards) and writes them to `dir`.
+void CalibrateFromBoards(const DemoOptions& options, const fs::path& dir, nlohmann::json* json,
+                         StereoCalibration* out, std::FILE* log) {
   sim::CalibrationBoardOptions board_options;
   board_options.seed = options.seed;
   board_options.num_stereo_views = options.board_views;
-  const sim::CalibrationBoardSet boards = sim::RenderCalibrationBoards(board_options);
+  const sim::BoardCalibration calibration = sim::CalibrateFromRenderedBoards(
+      board_options, calib::ParseMethod(options.calibration_method));
+  const sim::CalibrationBoardSet& boards = calibration.boards;
+  const calib::StereoDetections& detections = calibration.detections;
+  const calib::CalibrationReport& report = calibration.report;
   fs::create_directories(dir);
   sim::WriteCalibrationBoards(dir, boards);
-  std::vector<fs::path> left_paths, right_paths;
-  for (size_t i = 0; i < boards.views.size(); ++i) {
-    left_paths.push_back(dir / fmt::format("left_{:02d}.png", i));
-    right_paths.push_back(dir / fmt::format("right_{:02d}.png", i));
-  }
-  const calib::PatternSpec spec = calib::ParsePatternSpec(fmt::format(
-      "chessboard:{}x{}:{}", boards.board.cols, boards.board.rows, boards.board.square_m));
-  const calib::StereoDetections detections =
-      calib::DetectStereoPairs(left_paths, right_paths, spec, calib::DetectionOptions(), false);
-  const calib::StereoObservations observations =
-      calib::ObservationsFromDetections(detections, calib::MakeBoardGeometry(spec));
-  calib::StereoCalibrationOptions calib_options;
-  calib_options.method = calib::ParseMethod(options.calibration_method);
-  const calib::StereoCalibrationResult estimate =
-      calib::CalibrateStereo(observations, calib_options);
-  const calib::CalibrationReport report = calib::EvaluateCalibration(observations, estimate);
   *out = report.calibration;
   const StereoCalibration& truth = boards.calibration;
   const double true_baseline = cv::norm(truth.T);
@@ -91,7 +77,6 @@ calib::StereoCalibrationResult CalibrateFromBoards(const DemoOptions& options, c
                options.calibration_method, detections.BothCount(), boards.views.size(),
                report.stereo_rms_px, out->M1.at<double>(0, 0), truth.M1.at<double>(0, 0),
                est_baseline * 1000, true_baseline * 1000));
-  return estimate;
 }
 
 // Draws every box, then its label where it overlaps no label drawn before and stays inside the
