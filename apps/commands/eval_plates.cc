@@ -69,7 +69,7 @@ int RunEvalPlates(int argc, char** argv) {
   app.add_option("--plots", plots_dir, "write plates.svg (relative error vs distance) here");
   return RunCommand(app, argc, argv, [&] {
     options.shapes.clear();
-    for (const std::string& s : shape_texts) options.shapes.push_back(ParsePlateShape(s));
+    for (const std::string& s : shape_texts) options.shapes.push_back(sim::ParsePlateShape(s));
     options.texture_dir = texture_dir;
     options.save_dir = save_dir;
     options.pipeline.params = ParseParams(raw_params);
