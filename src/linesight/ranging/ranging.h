@@ -7,10 +7,11 @@
 // where d_near is a high percentile (RangingOptions::near_percentile) of the obstacle's
 // median-smoothed disparities.
 //
-// Stages: valid disparities in the working depth range -> thin structures (the conductor) dropped
-// -> log-disparity histogram -> depth modes separated by valleys -> the nearest mode with enough
-// support is the obstacle (what lies behind it in the ROI is dropped)
-// -> local median smoothing -> near percentile -> sigma from the residuals.
+// Stages (each a function of its own in ranging_stages.h): valid disparities in the working depth
+// range -> thin structures (the conductor) dropped -> log-disparity histogram -> depth modes
+// separated by valleys -> the nearest mode with enough support is the obstacle (what lies behind
+// it in the ROI is dropped) -> local median smoothing -> near percentile -> sigma from the
+// residuals.
 #pragma once
 
 #include <limits>
