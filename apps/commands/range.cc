@@ -89,6 +89,7 @@ int RunRange(int argc, char** argv) {
     report["calibration"] = calib_path;
     report["method"] = pipeline.method();
     report["matcher"] = pipeline.matcher().Settings();
+    report["ranging_settings"] = RangingSettingsTable().ToJson(pipeline.options());
     report["min_depth_m"] = options.min_depth_m;
     report["max_depth_m"] = options.max_depth_m;
     report["disparity_range"] = {range.min_disparity, range.max_disparity()};

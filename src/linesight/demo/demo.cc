@@ -15,6 +15,7 @@
 #include "linesight/io/pfm.h"
 #include "linesight/io/stereo_calibration.h"
 #include "linesight/ranging/pipeline.h"
+#include "linesight/ranging/ranging_settings.h"
 #include "linesight/sim/board_calibration.h"
 
 namespace linesight {
@@ -241,6 +242,7 @@ DemoReport RunDemo(const DemoOptions& options, std::FILE* log) {
   json["auto_found"] = auto_json;
   json["method"] = pipeline.method();
   json["matcher"] = pipeline.matcher().Settings();
+  json["ranging_settings"] = RangingSettingsTable().ToJson(pipeline.options());
   json["distance_definition"] =
       "depth of the obstacle's nearest visible surface along the rectified left optical axis";
 

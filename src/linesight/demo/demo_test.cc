@@ -4,6 +4,7 @@
 
 #include "linesight/core/error.h"
 #include "linesight/io/json_io.h"
+#include "linesight/ranging/ranging_settings.h"
 
 namespace linesight {
 namespace {
@@ -41,7 +42,9 @@ TEST(RunDemo, RangesAnObstacleWithTheTrueCalibration) {
                         "report.json", "rectified_left_ranged.png"}) {
     EXPECT_TRUE(fs::exists(o.out_dir / f)) << f;
   }
-  EXPECT_EQ(ReadJson(o.out_dir / "report.json")["obstacles"].size(), 1u);
+  const nlohmann::json written = ReadJson(o.out_dir / "report.json");
+  EXPECT_EQ(written["obstacles"].size(), 1u);
+  EXPECT_EQ(written["ranging_settings"].size(), RangingSettingsTable().rows().size());
   fs::remove_all(o.out_dir);
 }
 

@@ -16,6 +16,7 @@
 #include "linesight/eval/report.h"
 #include "linesight/io/image_io.h"
 #include "linesight/io/json_io.h"
+#include "linesight/ranging/ranging_settings.h"
 #include "linesight/stereo/matcher.h"
 
 namespace linesight {
@@ -68,6 +69,7 @@ PlateStudyReport RunPlateStudy(const PlateStudyOptions& options, ProgressBar* pr
 
   PlateStudyReport report;
   report.method = pipeline.method();
+  report.ranging_settings = RangingSettingsTable().ToJson(pipeline_options);
   report.machine = MachineDescription();
   report.background = TextureName(options.background);
   report.rig = options.rig;
@@ -191,6 +193,7 @@ nlohmann::json PlateStudyReport::ToJson() const {
             {"baseline_m", rig.baseline_m}}},
           {"machine", machine},
           {"elapsed_s", elapsed_s},
+          {"ranging_settings", ranging_settings},
           {"cells", rows}};
 }
 

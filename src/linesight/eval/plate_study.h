@@ -53,6 +53,7 @@ struct PlateStudyReport {
   sim::PlateRig rig;
   int runs = 0;
   double noise_dn = 0.0, elapsed_s = 0.0;
+  nlohmann::json ranging_settings;  // every --ranging setting the chain ran with
   std::vector<PlateCell> cells;
 
   std::string ToMarkdown() const;

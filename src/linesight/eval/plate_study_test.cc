@@ -7,6 +7,7 @@
 
 #include "linesight/core/error.h"
 #include "linesight/eval/eval_test_util.h"
+#include "linesight/ranging/ranging_settings.h"
 
 namespace linesight {
 namespace {
@@ -39,6 +40,12 @@ TEST(PlateStudyTest, PhotographTexturedPlateAndBoxAreRangedWithinOnePercent) {
   }
   EXPECT_NE(report.ToMarkdown().find("| box | baboon |"), std::string::npos);
   EXPECT_EQ(report.ToJson()["cells"].size(), 4u);
+  // Every setting of the chain is recorded; the study ranges rectified pairs.
+  const nlohmann::json settings = report.ToJson()["ranging_settings"];
+  EXPECT_EQ(settings.size(), RangingSettingsTable().rows().size());
+  RangingPipelineOptions ran = options.pipeline;
+  ran.input_rectified = true;
+  EXPECT_EQ(settings, RangingSettingsTable().ToJson(ran));
 }
 
 TEST(PlateStudyTest, MissingTextureIsAnInputErrorNamingTheFile) {

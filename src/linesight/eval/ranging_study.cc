@@ -16,6 +16,7 @@
 #include "linesight/io/image_io.h"
 #include "linesight/io/middlebury_calib.h"
 #include "linesight/io/pfm.h"
+#include "linesight/ranging/ranging_settings.h"
 #include "linesight/sim/board_calibration.h"
 
 namespace linesight {
@@ -283,6 +284,7 @@ RangingStudyReport RunRangingStudy(const RangingStudyOptions& options, ProgressB
   for (const auto& [name, calib] : calibs) pipelines.emplace_back(calib, options.pipeline);
   report.method = pipelines.front().method();
   report.disparity_range = pipelines.front().disparity_range();
+  report.ranging_settings = RangingSettingsTable().ToJson(options.pipeline);
 
   Stopwatch watch;
   for (size_t t = 0; t < options.types.size(); ++t) {
@@ -382,6 +384,7 @@ nlohmann::json RangingStudyReport::ToJson() const {
         {"true_rectified_focal_px", e.true_rectified_focal_px}};
   }
   report["method"] = method;
+  report["ranging_settings"] = ranging_settings;
   report["disparity_range"] = {disparity_range.min_disparity, disparity_range.max_disparity()};
   report["runs"] = runs;
   report["cells"] = nlohmann::json::array();

@@ -97,6 +97,7 @@ MiddleburyDepthCheck CheckMiddleburyDepth(const std::filesystem::path& dir,
 struct RangingStudyReport {
   std::string method;  // the chain's matcher
   DisparityRange disparity_range;
+  nlohmann::json ranging_settings;  // every --ranging setting the chain ran with
   int runs = 0;
   std::vector<std::string> calibrations, types;  // names, in the order of the options
   std::vector<RangingStudyCell> cells;           // type-major, then distance, then calibration

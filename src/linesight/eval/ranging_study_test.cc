@@ -10,6 +10,7 @@
 
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/error.h"
+#include "linesight/ranging/ranging_settings.h"
 
 namespace linesight {
 namespace {
@@ -87,6 +88,10 @@ TEST(RangingStudy, RangesTheRenderedDamperWithinOnePercent) {
   EXPECT_FALSE(j.contains("middlebury_motorcycle"));
   EXPECT_FALSE(j.contains("estimated_calibration"));
   EXPECT_EQ(report.MiddleburySummary(), "");
+  // Every setting of the chain is recorded, with the value the study ran with.
+  ASSERT_TRUE(j.contains("ranging_settings"));
+  EXPECT_EQ(j["ranging_settings"].size(), RangingSettingsTable().rows().size());
+  EXPECT_EQ(j["ranging_settings"], RangingSettingsTable().ToJson(SmallStudy().pipeline));
 }
 
 // The writers on a report with known numbers.
