@@ -82,6 +82,32 @@ uint64_t NoiseSeedFor(const std::string& key, uint64_t seed) {
   return h;
 }
 
+void CheckStudyMethods(const std::vector<std::string>& methods,
+                       const std::map<std::string, std::string>& params) {
+  for (const std::string& method : methods) {
+    MatcherOptions probe;
+    probe.params = ParamsForMethod(params, method);
+    CreateMatcher(method, probe);
+  }
+}
+
+MatcherOptions StudyMatcherOptions(const std::string& method, int min_disparity,
+                                   int num_disparities, int threads,
+                                   const std::map<std::string, std::string>& params) {
+  MatcherOptions m;
+  m.min_disparity = min_disparity;
+  m.num_disparities = num_disparities;
+  m.threads = threads;
+  m.params = ParamsForMethod(params, method);
+  return m;
+}
+
+NoisyPair AddPairNoise(const cv::Mat& left, const cv::Mat& right, const NoiseSpec& noise,
+                       const std::string& key, uint64_t seed) {
+  return {AddImageNoise(left, noise, NoiseSeedFor(key + "/left", seed)),
+          AddImageNoise(right, noise, NoiseSeedFor(key + "/right", seed))};
+}
+
 std::vector<SceneRef> SelectSets(const std::vector<SceneRef>& scenes,
                                  const std::vector<std::string>& sets, const std::string& what) {
   const bool all = sets.empty() || std::find(sets.begin(), sets.end(), "*") != sets.end();
@@ -125,28 +151,18 @@ PrimaryMetric PrimaryMetricFor(const EvalStereoResult& r) {
 EvalStereoReport RunEvalStereo(const std::vector<SceneRef>& scenes,
                                const EvalStereoOptions& options, ProgressBar* progress) {
   options.Check();
-  // Fail on unknown methods / parameters before any scene is loaded.
-  for (const std::string& method : options.methods) {
-    MatcherOptions probe;
-    probe.params = ParamsForMethod(options.params, method);
-    CreateMatcher(method, probe);
-  }
+  CheckStudyMethods(options.methods, options.params);
   EvalStereoReport report;
   for (const SceneRef& ref : scenes) {
     const StereoScene scene = LoadScene(ref);
     for (const NoiseSpec& noise : options.noise) {
       const std::string noise_label = noise.Label();
       const std::string scene_key = ref.set + "/" + ref.name + "/" + noise_label;
-      const cv::Mat left =
-          AddImageNoise(scene.left, noise, NoiseSeedFor(scene_key + "/left", options.noise_seed));
-      const cv::Mat right =
-          AddImageNoise(scene.right, noise, NoiseSeedFor(scene_key + "/right", options.noise_seed));
+      const auto [left, right] =
+          AddPairNoise(scene.left, scene.right, noise, scene_key, options.noise_seed);
       for (const std::string& method : options.methods) {
-        MatcherOptions matcher_options;
-        matcher_options.min_disparity = scene.min_disparity;
-        matcher_options.num_disparities = scene.num_disparities;
-        matcher_options.threads = options.threads;
-        matcher_options.params = ParamsForMethod(options.params, method);
+        const MatcherOptions matcher_options = StudyMatcherOptions(
+            method, scene.min_disparity, scene.num_disparities, options.threads, options.params);
         auto matcher = CreateMatcher(method, matcher_options);
         const std::string cell = fmt::format("{}/{} {} {}", ref.set, ref.name, noise_label, method);
         nlohmann::json key;

@@ -15,6 +15,7 @@
 #include "linesight/eval/dataset.h"
 #include "linesight/eval/metrics.h"
 #include "linesight/eval/noise.h"
+#include "linesight/stereo/matcher.h"
 
 namespace linesight {
 
@@ -82,6 +83,24 @@ std::map<std::string, std::string> ParamsForMethod(const std::map<std::string, s
 // Seed of the noise of one view of one scene (FNV-1a of `key`, e.g. "set/scene/noise/left", mixed
 // with `seed`), so that the noise does not depend on the order in which scenes run.
 uint64_t NoiseSeedFor(const std::string& key, uint64_t seed);
+
+// Creates every method of a study once with its parameters, so that an unknown method or
+// parameter fails (UsageError) before any scene is loaded.
+void CheckStudyMethods(const std::vector<std::string>& methods,
+                       const std::map<std::string, std::string>& params);
+
+// The matcher options of one study run of `method` over a scene's search range.
+MatcherOptions StudyMatcherOptions(const std::string& method, int min_disparity,
+                                   int num_disparities, int threads,
+                                   const std::map<std::string, std::string>& params);
+
+struct NoisyPair {
+  cv::Mat left, right;
+};
+// `left` and `right` with `noise` added, seeded by NoiseSeedFor(key + "/left" | "/right", seed),
+// key = "set/scene/noise".
+NoisyPair AddPairNoise(const cv::Mat& left, const cv::Mat& right, const NoiseSpec& noise,
+                       const std::string& key, uint64_t seed);
 
 // Markdown table with a row per method and a column per noise setting; value(method, noise) fills
 // the cells (two decimals; NaN, a setting the method did not run, prints "–").

@@ -138,26 +138,17 @@ double MeanObstacleBad1(const std::vector<EvalStereoResult>& results, const std:
 EvalObstaclesReport RunEvalObstacles(const std::vector<StereoScene>& scenes,
                                      const EvalObstaclesOptions& options, ProgressBar* progress) {
   options.Check();
-  for (const std::string& method : options.methods) {
-    MatcherOptions probe;
-    probe.params = ParamsForMethod(options.params, method);
-    CreateMatcher(method, probe);
-  }
+  CheckStudyMethods(options.methods, options.params);
   EvalObstaclesReport report;
   for (const StereoScene& scene : scenes) {
     for (const NoiseSpec& noise : options.noise) {
       const std::string label = noise.Label();
       const std::string key = scene.ref.set + "/" + scene.ref.name + "/" + label;
-      const cv::Mat left =
-          AddImageNoise(scene.left, noise, NoiseSeedFor(key + "/left", options.noise_seed));
-      const cv::Mat right =
-          AddImageNoise(scene.right, noise, NoiseSeedFor(key + "/right", options.noise_seed));
+      const auto [left, right] =
+          AddPairNoise(scene.left, scene.right, noise, key, options.noise_seed);
       for (const std::string& method : options.methods) {
-        MatcherOptions m;
-        m.min_disparity = scene.min_disparity;
-        m.num_disparities = scene.num_disparities;
-        m.threads = options.threads;
-        m.params = ParamsForMethod(options.params, method);
+        const MatcherOptions m = StudyMatcherOptions(
+            method, scene.min_disparity, scene.num_disparities, options.threads, options.params);
         auto matcher = CreateMatcher(method, m);
         Stopwatch watch;
         const cv::Mat disparity = matcher->Compute(left, right).disparity;

@@ -30,24 +30,11 @@ std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const Stereo
                                           const ObstacleFinderOptions& options) {
   options.Check();
   CheckDisparityMap(disparity, "disparity");
-  const double offset = geometry.disparity_offset_px;
-  const double d_low = geometry.DisparityFromDepth(options.max_depth_m);
-  const double d_high = geometry.DisparityFromDepth(options.min_depth_m);
-  const double log_low = std::log(d_low + offset);
-  const double band = options.depth_band_relative;
-  const int bands = int(std::ceil((std::log(d_high + offset) - log_low) / band)) + 1;
-
+  const DepthBands depth_bands(geometry, options.min_depth_m, options.max_depth_m,
+                               options.depth_band_relative);
+  const double band = depth_bands.width;
   // Band index of every pixel in the working range (-1 elsewhere).
-  cv::Mat band_of(disparity.size(), CV_32S, cv::Scalar(-1));
-  for (int y = 0; y < disparity.rows; ++y) {
-    const float* d = disparity.ptr<float>(y);
-    int* b = band_of.ptr<int>(y);
-    for (int x = 0; x < disparity.cols; ++x) {
-      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) {
-        b[x] = std::clamp(int((std::log(d[x] + offset) - log_low) / band), 0, bands - 1);
-      }
-    }
-  }
+  const cv::Mat band_of = depth_bands.Map(disparity);
 
   // Thick pixels: deep inside a body of at least min_width at its depth.
   ThinStructureOptions thin;
@@ -76,7 +63,7 @@ std::vector<cv::Rect> FindObstacleRegions(const cv::Mat& disparity, const Stereo
     std::nth_element(region_bands.begin(), region_bands.begin() + region_bands.size() / 2,
                      region_bands.end());
     const int k = region_bands[region_bands.size() / 2];
-    const double d_band = std::exp(log_low + (k + 0.5) * band) - offset;
+    const double d_band = depth_bands.CentreDisparity(k);
     const int grow = int(std::ceil(0.5 * options.min_width_m * geometry.focal_px /
                                    geometry.DepthFromDisparity(d_band))) +
                      1;

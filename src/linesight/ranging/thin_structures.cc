@@ -9,6 +9,27 @@
 
 namespace linesight {
 
+DepthBands::DepthBands(const StereoGeometry& geometry, double min_depth_m, double max_depth_m,
+                       double band_width)
+    : offset(geometry.disparity_offset_px),
+      d_low(geometry.DisparityFromDepth(max_depth_m)),
+      d_high(geometry.DisparityFromDepth(min_depth_m)),
+      log_low(std::log(d_low + offset)),
+      width(band_width),
+      count(int(std::ceil((std::log(d_high + offset) - log_low) / width)) + 1) {}
+
+cv::Mat DepthBands::Map(const cv::Mat& disparity) const {
+  cv::Mat band_of(disparity.size(), CV_32S, cv::Scalar(-1));
+  for (int y = 0; y < disparity.rows; ++y) {
+    const float* d = disparity.ptr<float>(y);
+    int* b = band_of.ptr<int>(y);
+    for (int x = 0; x < disparity.cols; ++x) {
+      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) b[x] = Of(d[x]);
+    }
+  }
+  return band_of;
+}
+
 void ThinStructureOptions::Check() const {
   CheckOption(min_width_m > 0.0, "ThinStructureOptions.min_width_m", min_width_m, "must be > 0");
   CheckOption(min_width_px >= 0.0 && min_width_px <= 64.0, "ThinStructureOptions.min_width_px",
@@ -27,14 +48,13 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   LS_CHECK(disparity.type() == CV_32FC1);
   const cv::Rect image(0, 0, disparity.cols, disparity.rows);
   LS_CHECK((region & image) == region);
-  const double offset = geometry.disparity_offset_px;
-  const double d_low = geometry.DisparityFromDepth(options.max_depth_m);
-  const double d_high = geometry.DisparityFromDepth(options.min_depth_m);
-  const double log_low = std::log(d_low + offset);
-  const double band = options.depth_band_relative;
-  const int bands = int(std::ceil((std::log(d_high + offset) - log_low) / band)) + 1;
+  const DepthBands depth_bands(geometry, options.min_depth_m, options.max_depth_m,
+                               options.depth_band_relative);
+  const double offset = depth_bands.offset;
+  const double d_low = depth_bands.d_low, d_high = depth_bands.d_high;
+  const int bands = depth_bands.count;
   auto radius_of_band = [&](int k) {
-    const double d = std::exp(log_low + (k + 0.5) * band) - offset;
+    const double d = depth_bands.CentreDisparity(k);
     return 0.5 * std::max(options.min_width_px,
                           options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d));
   };
@@ -55,16 +75,12 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   const cv::Rect outer =
       (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
   const cv::Mat view = disparity(outer);
-  cv::Mat band_of(view.size(), CV_32S, cv::Scalar(-1));
+  const cv::Mat band_of = depth_bands.Map(view);
   std::vector<int> present(size_t(bands), 0);
-  for (int y = 0; y < view.rows; ++y) {
-    const float* d = view.ptr<float>(y);
-    int* b = band_of.ptr<int>(y);
-    for (int x = 0; x < view.cols; ++x) {
-      if (IsValidDisparity(d[x]) && d[x] >= d_low && d[x] <= d_high) {
-        b[x] = std::clamp(int((std::log(d[x] + offset) - log_low) / band), 0, bands - 1);
-        present[size_t(b[x])] = 1;
-      }
+  for (int y = 0; y < band_of.rows; ++y) {
+    const int* b = band_of.ptr<int>(y);
+    for (int x = 0; x < band_of.cols; ++x) {
+      if (b[x] >= 0) present[size_t(b[x])] = 1;
     }
   }
   cv::Mat body(view.size(), CV_8U, cv::Scalar(0));

@@ -5,11 +5,31 @@
 // 45 mm; damper weights, clamps and insulator sheds stay.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 #include <opencv2/core.hpp>
 
 #include "linesight/geometry/depth.h"
 
 namespace linesight {
+
+// Bands of equal relative depth over a working range: ln(d + doffs) from the far end in steps of
+// `width`, for the disparities d of depths [min_depth_m, max_depth_m].
+struct DepthBands {
+  DepthBands(const StereoGeometry& geometry, double min_depth_m, double max_depth_m, double width);
+  double offset, d_low, d_high, log_low, width;
+  int count;
+
+  // The band of a finite disparity inside [d_low, d_high].
+  int Of(double d) const {
+    return std::clamp(int((std::log(d + offset) - log_low) / width), 0, count - 1);
+  }
+  // The disparity at the centre of band k.
+  double CentreDisparity(int k) const { return std::exp(log_low + (k + 0.5) * width) - offset; }
+  // CV_32S map of every pixel's band, -1 where the disparity is invalid or outside the range.
+  cv::Mat Map(const cv::Mat& disparity) const;
+};
 
 struct ThinStructureOptions {
   double min_width_m = 0.045;  // narrower surfaces are thin (m)

@@ -39,6 +39,19 @@ void CheckPair(const cv::Mat& left, const cv::Mat& right) {
   }
 }
 
+// An OpenCV matcher on the grey pair, with OpenCV's pool sized for the call; its fixed-point map
+// in our encoding (no checks beyond its own, so `checked` is the same map).
+MatchResult ComputeWithOpenCv(cv::StereoMatcher& matcher, const MatcherOptions& options,
+                              const cv::Mat& left, const cv::Mat& right) {
+  CheckPair(left, right);
+  const ScopedOpenCvThreads threads(options.threads);
+  cv::Mat fixed;
+  matcher.compute(ToGray8(left), ToGray8(right), fixed);
+  const cv::Mat disparity =
+      FixedPointToFloatDisparity(fixed, options.min_disparity, options.num_disparities);
+  return {disparity, disparity};
+}
+
 class OpenCvBlockMatcher final : public StereoMatcher {
  public:
   OpenCvBlockMatcher(const MatcherOptions& options, MatcherParams& params) : options_(options) {
@@ -70,13 +83,7 @@ class OpenCvBlockMatcher final : public StereoMatcher {
   std::string Name() const override { return "bm"; }
 
   MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override {
-    CheckPair(left, right);
-    const ScopedOpenCvThreads threads(options_.threads);
-    cv::Mat fixed;
-    bm_->compute(ToGray8(left), ToGray8(right), fixed);
-    const cv::Mat disparity =
-        FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
-    return {disparity, disparity};
+    return ComputeWithOpenCv(*bm_, options_, left, right);
   }
 
   nlohmann::json Settings() const override {
@@ -131,13 +138,7 @@ class OpenCvSgbm final : public StereoMatcher {
   const cv::Ptr<cv::StereoSGBM>& matcher() const { return sgbm_; }
 
   MatchResult Compute(const cv::Mat& left, const cv::Mat& right) override {
-    CheckPair(left, right);
-    const ScopedOpenCvThreads threads(options_.threads);
-    cv::Mat fixed;
-    sgbm_->compute(ToGray8(left), ToGray8(right), fixed);
-    const cv::Mat disparity =
-        FixedPointToFloatDisparity(fixed, options_.min_disparity, options_.num_disparities);
-    return {disparity, disparity};
+    return ComputeWithOpenCv(*sgbm_, options_, left, right);
   }
 
   nlohmann::json Settings() const override {
