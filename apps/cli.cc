@@ -48,6 +48,24 @@ std::map<std::string, std::string> ParseParams(const std::vector<std::string>& r
   return ParseKeyValues("--param", raw);
 }
 
+void AddLineGeometryOptions(CLI::App& app, double* conductor_offset_x_m,
+                            double* conductor_offset_y_m, double* conductor_yaw_rad,
+                            double* tower_offset_x_m) {
+  app.add_option("--conductor-offset-x", *conductor_offset_x_m,
+                 "x of the conductor axis at the camera, in the left camera frame (m); 0.06 = rig "
+                 "centred under the line")
+      ->capture_default_str();
+  app.add_option("--conductor-offset-y", *conductor_offset_y_m,
+                 "y of the conductor axis at the camera (m; < 0 = above the camera)")
+      ->capture_default_str();
+  app.add_option("--conductor-yaw", *conductor_yaw_rad,
+                 "heading of the line about the camera y axis (rad)")
+      ->capture_default_str();
+  app.add_option("--tower-offset-x", *tower_offset_x_m,
+                 "x offset of the end tower's body from the middle of the conductors (m)")
+      ->capture_default_str();
+}
+
 void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options) {
   app.add_option("--source", *spec,
                  fmt::format("where pairs come from: {}", fmt::join(FrameSourceSchemes(), " | ")))

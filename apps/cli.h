@@ -38,6 +38,12 @@ std::map<std::string, std::string> ParseParams(const std::vector<std::string>& r
 // go to linesight::ApplyRangingSettings("--ranging", raw, &options).
 void AddRangingSettingsOption(CLI::App& app, std::vector<std::string>* raw);
 
+// Adds the line-geometry options of the synthetic power-line scene (--conductor-offset-x,
+// --conductor-offset-y, --conductor-yaw, --tower-offset-x) of `render` and `eval ranging`.
+void AddLineGeometryOptions(CLI::App& app, double* conductor_offset_x_m,
+                            double* conductor_offset_y_m, double* conductor_yaw_rad,
+                            double* tower_offset_x_m);
+
 // Adds --source and the capture options (--width --height --fps --loop --synthetic-*) of
 // `serve` and `acquire`.
 void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* options);

@@ -43,19 +43,8 @@ int RunEvalRanging(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--seed", options.seed, "scene seed")->capture_default_str();
   app.add_option("--noise", options.noise_dn, "sensor read noise (DN)")->capture_default_str();
-  app.add_option("--conductor-offset-x", options.conductor_offset_x_m,
-                 "x of the conductor axis at the camera, in the left camera frame (m); 0.06 = rig "
-                 "centred under the line")
-      ->capture_default_str();
-  app.add_option("--conductor-offset-y", options.conductor_offset_y_m,
-                 "y of the conductor axis at the camera (m; < 0 = above the camera)")
-      ->capture_default_str();
-  app.add_option("--conductor-yaw", options.conductor_yaw_rad,
-                 "heading of the line about the camera y axis (rad)")
-      ->capture_default_str();
-  app.add_option("--tower-offset-x", options.tower_offset_x_m,
-                 "x offset of the end tower's body from the middle of the conductors (m)")
-      ->capture_default_str();
+  AddLineGeometryOptions(app, &options.conductor_offset_x_m, &options.conductor_offset_y_m,
+                         &options.conductor_yaw_rad, &options.tower_offset_x_m);
   app.add_option("--supersampling", options.supersampling, "renderer supersampling per axis")
       ->capture_default_str();
   app.add_option("--method", options.pipeline.method,

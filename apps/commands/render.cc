@@ -78,20 +78,9 @@ int RunRender(int argc, char** argv) {
   app.add_option("--conductors", options.num_conductors, "number of conductors (1..4)")
       ->capture_default_str();
   app.add_option("--clouds", options.cloud_cover, "cloud cover 0..1")->capture_default_str();
-  app.add_option("--conductor-offset-x", options.conductor_offset_x_m,
-                 "x of the conductor axis at the camera in the left camera frame (m; 0.06 = rig "
-                 "centred under the line)")
-      ->capture_default_str();
-  app.add_option("--conductor-offset-y", options.conductor_offset_y_m,
-                 "y of the conductor axis at the camera (m; < 0 = above the camera)")
-      ->capture_default_str();
-  app.add_option("--conductor-yaw", options.conductor_yaw_rad,
-                 "heading of the line about the camera y axis (rad)")
-      ->capture_default_str();
+  AddLineGeometryOptions(app, &options.conductor_offset_x_m, &options.conductor_offset_y_m,
+                         &options.conductor_yaw_rad, &options.tower_offset_x_m);
   app.add_flag("--no-towers", no_towers, "leave out the lattice towers");
-  app.add_option("--tower-offset-x", options.tower_offset_x_m,
-                 "x offset of the end tower's body from the middle of the conductors (m)")
-      ->capture_default_str();
   app.add_flag("--rectified", options.render_rectified_pair,
                "also ray cast an ideal rectified pair (rectified_left/right.png)");
   app.add_option("--boards", boards,

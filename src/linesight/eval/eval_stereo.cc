@@ -353,22 +353,36 @@ std::string MethodByNoiseTable(
   return out;
 }
 
-void EvalStereoReport::WritePlots(const fs::path& dir) const {
+bool WriteNoiseChart(
+    const std::vector<EvalStereoResult>& results, const std::string& title,
+    const std::string& y_label,
+    const std::function<double(const std::string& method, const std::string& noise)>& value,
+    const fs::path& file) {
   const auto noises = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.noise; });
   const auto methods = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.method; });
-  if (noises.size() < 2) return;
+  if (noises.size() < 2) return false;
   LineChart chart;
-  chart.title = "Error vs image noise";
+  chart.title = title;
   chart.x_label = "noise (gauss: variance, sp: density)";
-  chart.y_label = "headline bad-pixel % (mean over sets)";
+  chart.y_label = y_label;
   chart.x_ticks = noises;
   for (const std::string& method : methods) {
     PlotSeries series{method, {}};
-    for (const std::string& noise : noises) series.y.push_back(MeanPrimary(results, method, noise));
+    for (const std::string& noise : noises) series.y.push_back(value(method, noise));
     chart.series.push_back(series);
   }
-  fs::create_directories(dir);
-  WriteSvg(dir / "noise.svg", chart);
+  fs::create_directories(file.parent_path());
+  WriteSvg(file, chart);
+  return true;
+}
+
+void EvalStereoReport::WritePlots(const fs::path& dir) const {
+  WriteNoiseChart(
+      results, "Error vs image noise", "headline bad-pixel % (mean over sets)",
+      [&](const std::string& method, const std::string& noise) {
+        return MeanPrimary(results, method, noise);
+      },
+      dir / "noise.svg");
 }
 
 }  // namespace linesight

@@ -102,6 +102,14 @@ struct NoisyPair {
 NoisyPair AddPairNoise(const cv::Mat& left, const cv::Mat& right, const NoiseSpec& noise,
                        const std::string& key, uint64_t seed);
 
+// Line chart of a figure against image noise, one series per method: value(method, noise) gives
+// the points. Written to dir/file; false (nothing written) with fewer than two noise settings.
+bool WriteNoiseChart(
+    const std::vector<EvalStereoResult>& results, const std::string& title,
+    const std::string& y_label,
+    const std::function<double(const std::string& method, const std::string& noise)>& value,
+    const std::filesystem::path& file);
+
 // Markdown table with a row per method and a column per noise setting; value(method, noise) fills
 // the cells (two decimals; NaN, a setting the method did not run, prints "–").
 std::string MethodByNoiseTable(

@@ -224,23 +224,13 @@ std::string EvalObstaclesReport::ToMarkdown() const {
 }
 
 std::vector<std::string> EvalObstaclesReport::WritePlots(const fs::path& dir) const {
-  const auto noises = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.noise; });
-  const auto methods = UniqueInOrder(results, [](const EvalStereoResult& r) { return r.method; });
-  if (noises.size() < 2) return {};
-  LineChart chart;
-  chart.title = "Obstacle pixels: error vs image noise";
-  chart.x_label = "noise (gauss: variance, sp: density)";
-  chart.y_label = "bad-1 on obstacle pixels (%)";
-  chart.x_ticks = noises;
-  for (const std::string& method : methods) {
-    PlotSeries series{method, {}};
-    for (const std::string& noise : noises) {
-      series.y.push_back(MeanObstacleBad1(results, method, noise));
-    }
-    chart.series.push_back(series);
-  }
-  fs::create_directories(dir);
-  WriteSvg(dir / "obstacles_noise.svg", chart);
+  const bool written = WriteNoiseChart(
+      results, "Obstacle pixels: error vs image noise", "bad-1 on obstacle pixels (%)",
+      [&](const std::string& method, const std::string& noise) {
+        return MeanObstacleBad1(results, method, noise);
+      },
+      dir / "obstacles_noise.svg");
+  if (!written) return {};
   return {"obstacles_noise.svg"};
 }
 
