@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
+#include "linesight/core/option_test_util.h"
 #include "linesight/io/json_io.h"
 #include "linesight/ranging/ranging_settings.h"
 
@@ -13,15 +14,10 @@ namespace fs = std::filesystem;
 TEST(DemoOptions, DefaultsAreValid) { EXPECT_NO_THROW(DemoOptions().Check()); }
 
 TEST(DemoOptions, RejectsBadValues) {
-  DemoOptions o;
-  o.board_views = 2;
-  EXPECT_THROW(o.Check(), OptionError);
-  o = DemoOptions();
-  o.min_depth_m = 7;
-  EXPECT_THROW(o.Check(), OptionError);
-  o = DemoOptions();
-  o.calibration_method = "magic";
-  EXPECT_THROW(o.Check(), UsageError);
+  using testing::ExpectCheckRejects;
+  ExpectCheckRejects<DemoOptions>([](auto& o) { o.board_views = 2; });
+  ExpectCheckRejects<DemoOptions>([](auto& o) { o.min_depth_m = 7; });
+  ExpectCheckRejects<DemoOptions, UsageError>([](auto& o) { o.calibration_method = "magic"; });
 }
 
 // The whole chain with the true calibration and one obstacle: the measured distance must be within

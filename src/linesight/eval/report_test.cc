@@ -9,6 +9,15 @@
 namespace linesight {
 namespace {
 
+// Options of a report over two tiny synthetic scenes written to dir/data, into dir/results.
+ReportOptions TinyReportOptions(const testing::ScopedTempDir& dir) {
+  testing::WriteTwoSyntheticScenes(dir.path() / "data");
+  ReportOptions options;
+  options.data_dir = dir.path() / "data";
+  options.out_dir = dir.path() / "results";
+  return options;
+}
+
 TEST(ReportTest, DefaultsValidAndBoundaries) {
   ReportOptions o;
   o.data_dir = "data";
@@ -45,10 +54,7 @@ TEST(ReportTest, MachineDescriptionNamesTheThreads) {
 
 TEST(ReportTest, PageOnTinySyntheticDataHasEverySection) {
   testing::ScopedTempDir dir;
-  testing::WriteTwoSyntheticScenes(dir.path() / "data");
-  ReportOptions options;
-  options.data_dir = dir.path() / "data";
-  options.out_dir = dir.path() / "results";
+  ReportOptions options = TinyReportOptions(dir);
   options.methods = {"isgm", "sgbm", "gc"};
   options.gc_jobs = 2;  // gc runs side by side
   options.noise = {NoiseSpec(), NoiseSpec::Parse("sp:0.15")};
@@ -85,10 +91,7 @@ TEST(ReportTest, PageOnTinySyntheticDataHasEverySection) {
 
 TEST(ReportTest, MissingSetIsAnInputError) {
   testing::ScopedTempDir dir;
-  testing::WriteTwoSyntheticScenes(dir.path() / "data");
-  ReportOptions options;
-  options.data_dir = dir.path() / "data";
-  options.out_dir = dir.path() / "results";
+  ReportOptions options = TinyReportOptions(dir);
   options.sets = {"kitti-2015"};
   options.show_progress = false;
   EXPECT_THROW(GenerateReport(options), InputError);
@@ -97,10 +100,7 @@ TEST(ReportTest, MissingSetIsAnInputError) {
 
 TEST(ReportTest, BadSetOrMethodFailsBeforeAnythingIsWritten) {
   testing::ScopedTempDir dir;
-  testing::WriteTwoSyntheticScenes(dir.path() / "data");
-  ReportOptions base;
-  base.data_dir = dir.path() / "data";
-  base.out_dir = dir.path() / "results";
+  ReportOptions base = TinyReportOptions(dir);
   base.show_progress = false;
   ReportOptions gc = base;
   gc.gc_sets = {"middlebury-2001-2003", "no-such-set"};

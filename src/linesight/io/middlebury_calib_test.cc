@@ -22,25 +22,26 @@ const char* kMotorcycle =
     "vmin=7\n"
     "vmax=65\n";
 
+// Every parsed field equals its expected value (exactly: the text holds them as written).
+void ExpectCalib(const MiddleburyCalib& c, const MiddleburyCalib& expected) {
+  EXPECT_EQ(c.focal_px, expected.focal_px);
+  EXPECT_EQ(c.cx, expected.cx);
+  EXPECT_EQ(c.cy, expected.cy);
+  EXPECT_EQ(c.doffs_px, expected.doffs_px);
+  EXPECT_EQ(c.baseline_mm, expected.baseline_mm);
+  EXPECT_EQ(c.num_disparities, expected.num_disparities);
+}
+
 TEST(MiddleburyCalib, ParsesTheCameraMatrixOffsetBaselineAndDisparities) {
-  const MiddleburyCalib c = ParseMiddleburyCalib(kMotorcycle, "calib.txt");
-  EXPECT_EQ(c.focal_px, 999.421);
-  EXPECT_EQ(c.cx, 294.182);
-  EXPECT_EQ(c.cy, 252.932);
-  EXPECT_EQ(c.doffs_px, 32.778);
-  EXPECT_EQ(c.baseline_mm, 193.001);
-  EXPECT_EQ(c.num_disparities, 70);
+  ExpectCalib(ParseMiddleburyCalib(kMotorcycle, "calib.txt"),
+              {999.421, 294.182, 252.932, 32.778, 193.001, 70});
 }
 
 TEST(MiddleburyCalib, NdispIsOptionalAndSpacesAroundKeysAreIgnored) {
-  const MiddleburyCalib c = ParseMiddleburyCalib(
-      "cam0 = [700 0 300.5; 0 700 200.25; 0 0 1]\r\n doffs=0\nbaseline = 120\n", "eth3d");
-  EXPECT_EQ(c.focal_px, 700);
-  EXPECT_EQ(c.cx, 300.5);
-  EXPECT_EQ(c.cy, 200.25);
-  EXPECT_EQ(c.doffs_px, 0);
-  EXPECT_EQ(c.baseline_mm, 120);
-  EXPECT_EQ(c.num_disparities, 0);
+  ExpectCalib(
+      ParseMiddleburyCalib(
+          "cam0 = [700 0 300.5; 0 700 200.25; 0 0 1]\r\n doffs=0\nbaseline = 120\n", "eth3d"),
+      {700, 300.5, 200.25, 0, 120, 0});
 }
 
 TEST(MiddleburyCalib, ErrorsNameTheSourceAndTheField) {

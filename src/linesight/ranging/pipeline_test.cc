@@ -11,6 +11,14 @@
 namespace linesight {
 namespace {
 
+// The chain's settings with isgm on one thread.
+RangingPipelineOptions IsgmOnOneThread() {
+  RangingPipelineOptions options;
+  options.method = "isgm";
+  options.threads = 1;
+  return options;
+}
+
 TEST(RangingPipelineOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
   EXPECT_NO_THROW(RangingPipelineOptions{}.Check());
   RangingPipelineOptions o;
@@ -60,9 +68,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   const cv::Rect box = scene.obstacles.front().box;
   const cv::Rect roi = (box + cv::Size(24, 24) - cv::Point(12, 12)) &
                        cv::Rect(0, 0, scene.left.cols, scene.left.rows);
-  RangingPipelineOptions options;
-  options.method = "isgm";
-  options.threads = 1;
+  const RangingPipelineOptions options = IsgmOnOneThread();
   const RangingPipeline pipeline(sim::MakeStereoCalibration(scene_options.rig), options);
   const RangingFrame frame =
       pipeline.Process(scene.left, scene.right, cv::Range(roi.y, roi.br().y));
@@ -149,9 +155,7 @@ TEST(RangingPipelineTest, RangesEveryObstacleTypeAt30Cm) {
     const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
     ASSERT_EQ(scene.obstacles.size(), 1u);
     const cv::Rect roi = GrowRoi(scene.obstacles.front().box, scene.left.size());
-    RangingPipelineOptions options;
-    options.method = "isgm";
-    options.threads = 1;
+    const RangingPipelineOptions options = IsgmOnOneThread();
     const RangingPipeline pipeline(sim::MakeStereoCalibration(scene_options.rig), options);
     const RangingFrame frame =
         pipeline.Process(scene.left, scene.right, cv::Range(roi.y, roi.br().y));

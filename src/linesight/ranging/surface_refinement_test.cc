@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/core/option_test_util.h"
 
 namespace linesight {
 namespace {
@@ -180,15 +181,10 @@ TEST(SurfaceRefinementTest, BadInputAndOptions) {
                InputError);
   EXPECT_THROW(RefineSurfaceDisparity(cv::Mat(), right, pixels, 12.0, SurfaceRefinementOptions()),
                InputError);
-  SurfaceRefinementOptions o;
-  o.step_px = 0.0;
-  EXPECT_THROW(o.Check(), OptionError);
-  o = SurfaceRefinementOptions();
-  o.min_ncc = 1.0;
-  EXPECT_THROW(o.Check(), OptionError);
-  o = SurfaceRefinementOptions();
-  o.gradient_ratio = -1.0;
-  EXPECT_THROW(o.Check(), OptionError);
+  using testing::ExpectCheckRejects;
+  ExpectCheckRejects<SurfaceRefinementOptions>([](auto& o) { o.step_px = 0.0; });
+  ExpectCheckRejects<SurfaceRefinementOptions>([](auto& o) { o.min_ncc = 1.0; });
+  ExpectCheckRejects<SurfaceRefinementOptions>([](auto& o) { o.gradient_ratio = -1.0; });
 }
 
 // A textureless dark front (x in [fx0, fx1), rows 40..59, grey 75) at disparity d in front of a
@@ -341,12 +337,8 @@ TEST(EdgeDisparityTest, BadInputAndOptions) {
   pair.right.convertTo(right16, CV_16U);
   EXPECT_THROW(MeasureEdgeDisparity(left16, right16, pair.pixels, 12.0, EdgeDisparityOptions()),
                InputError);
-  EdgeDisparityOptions o;
-  o.min_rows = 0;
-  EXPECT_THROW(o.Check(), OptionError);
-  o = EdgeDisparityOptions();
-  o.level_tolerance = 0.0;
-  EXPECT_THROW(o.Check(), OptionError);
+  testing::ExpectCheckRejects<EdgeDisparityOptions>([](auto& o) { o.min_rows = 0; });
+  testing::ExpectCheckRejects<EdgeDisparityOptions>([](auto& o) { o.level_tolerance = 0.0; });
 }
 
 }  // namespace
