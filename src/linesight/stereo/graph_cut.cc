@@ -426,34 +426,32 @@ GraphCutResult GraphCutMatcher::ComputeDetailed(const cv::Mat& left, const cv::M
 
 std::vector<MatcherParamDoc> GraphCutParamDocs() {
   const GraphCutOptions d;
-  auto text = [](auto value) { return fmt::format("{}", value); };
-  auto flag = [](bool value) { return std::string(value ? "true" : "false"); };
   return {
-      {"data", "bt|census", d.data_term == GraphCutDataTerm::kCensus ? "census" : "bt",
+      {"data", "bt|census", DataTermName(d.data_term),
        "data term: Birchfield-Tomasi dissimilarity or census Hamming distance"},
-      {"color", "bool", flag(d.use_color), "BT on each colour channel of BGR input (else grey)"},
-      {"census_window", "int", text(d.census_window), "census window side (px, odd, 3..7)"},
-      {"truncation", "number", text(d.truncation),
+      {"color", "bool", ParamDefault(d.use_color),
+       "BT on each colour channel of BGR input (else grey)"},
+      {"census_window", "int", ParamDefault(d.census_window), "census window side (px, odd, 3..7)"},
+      {"truncation", "number", ParamDefault(d.truncation),
        "data cost saturation (grey levels for bt, bits for census; > 0)"},
-      {"lambda", "number", text(d.lambda),
+      {"lambda", "number", ParamDefault(d.lambda),
        "Potts penalty for a disparity change between 4-neighbours across an edge"},
-      {"edge_threshold", "int", text(d.edge_threshold),
+      {"edge_threshold", "int", ParamDefault(d.edge_threshold),
        "neighbours closer than this (grey levels) are similar and pay lambda * edge_multiplier; "
        "0 = all pay lambda"},
-      {"edge_multiplier", "number", text(d.edge_multiplier),
+      {"edge_multiplier", "number", ParamDefault(d.edge_multiplier),
        "factor (>= 1) on lambda between similar neighbours"},
-      {"iterations", "int", text(d.iterations),
+      {"iterations", "int", ParamDefault(d.iterations),
        "largest number of cycles over all labels (stops early when a cycle does not lower the "
        "energy)"},
-      {"order", "random|sequential",
-       d.label_order == GraphCutLabelOrder::kRandom ? "random" : "sequential",
+      {"order", "random|sequential", LabelOrderName(d.label_order),
        "order of the expansion moves within a cycle"},
-      {"seed", "int", text(d.seed), "seed of the random label order (>= 0)"},
-      {"lr_check", "bool", flag(d.lr_check),
+      {"seed", "int", ParamDefault(d.seed), "seed of the random label order (>= 0)"},
+      {"lr_check", "bool", ParamDefault(d.lr_check),
        "solve the right view too and invalidate pixels failing the left-right check"},
-      {"lr_max_diff", "int", text(d.lr_max_diff),
+      {"lr_max_diff", "int", ParamDefault(d.lr_max_diff),
        "largest allowed left-right difference (px, >= 0)"},
-      {"fill_occlusions", "bool", flag(d.fill_occlusions),
+      {"fill_occlusions", "bool", ParamDefault(d.fill_occlusions),
        "with lr_check: fill invalidated pixels from the background side"},
   };
 }

@@ -112,34 +112,32 @@ IsgmOptions ReadIsgmOptions(const MatcherOptions& options, MatcherParams& params
 std::vector<MatcherParamDoc> IsgmParamDocs() {
   std::vector<MatcherParamDoc> docs = SgmParamDocs(IsgmDefaultSgmOptions());
   const PlaneRefinementOptions r = IsgmDefaultRefinementOptions();
-  auto text = [](auto value) { return fmt::format("{}", value); };
-  auto flag = [](bool value) { return std::string(value ? "true" : "false"); };
   docs.insert(
       docs.end(),
       {
-          {"superpixel_size", "int", text(r.superpixels.region_size),
+          {"superpixel_size", "int", ParamDefault(r.superpixels.region_size),
            "superpixel grid spacing, about their side (px, >= 4)"},
-          {"superpixel_compactness", "number", text(r.superpixels.compactness),
+          {"superpixel_compactness", "number", ParamDefault(r.superpixels.compactness),
            "grey-level difference that counts as much as one superpixel_size of distance (> 0)"},
-          {"plane_inlier", "number", text(r.inlier_threshold),
+          {"plane_inlier", "number", ParamDefault(r.inlier_threshold),
            "distance from a plane (px) within which a disparity supports it (> 0)"},
-          {"plane_outlier", "number", text(r.outlier_threshold),
+          {"plane_outlier", "number", ParamDefault(r.outlier_threshold),
            "valid disparities farther than this from their segment's plane are replaced (px, >= "
            "plane_inlier)"},
-          {"plane_min_inlier_ratio", "number", text(r.min_inlier_ratio),
+          {"plane_min_inlier_ratio", "number", ParamDefault(r.min_inlier_ratio),
            "fraction of a segment's valid disparities its plane(s) must explain (0..1]"},
-          {"plane_max_slant", "number", text(r.max_slant),
+          {"plane_max_slant", "number", ParamDefault(r.max_slant),
            "largest plane slope |a|, |b| (px of disparity per px)"},
-          {"two_planes", "bool", flag(r.two_plane_fallback),
+          {"two_planes", "bool", ParamDefault(r.two_plane_fallback),
            "a segment one plane cannot explain may take two (a depth edge inside it)"},
-          {"adopt_planes", "bool", flag(r.adopt_neighbour_planes),
+          {"adopt_planes", "bool", ParamDefault(r.adopt_neighbour_planes),
            "segments without a plane try their neighbours' planes"},
-          {"snap_inliers", "bool", flag(r.snap_inliers),
+          {"snap_inliers", "bool", ParamDefault(r.snap_inliers),
            "also replace valid disparities near the plane by the plane value"},
-          {"photometric_radius", "int", text(r.photometric_radius),
+          {"photometric_radius", "int", ParamDefault(r.photometric_radius),
            "two-plane segments pick a pixel's plane by image agreement over a (2r+1)^2 window "
            "(px); 0 = off"},
-          {"final_median", "int", text(r.median_size),
+          {"final_median", "int", ParamDefault(r.median_size),
            "median window over the final dense map: 0 (off), 3 or 5"},
       });
   return docs;

@@ -21,8 +21,10 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 
@@ -76,6 +78,14 @@ struct MatcherParamDoc {
   std::string default_value;  // the value used when the key is not given, as --param text
   std::string meaning;        // one line
 };
+
+// A default value as MatcherParamDoc::default_value text: true / false, or the number as fmt
+// prints it.
+inline std::string ParamDefault(bool value) { return value ? "true" : "false"; }
+template <typename Number>
+requires std::is_arithmetic_v<Number> std::string ParamDefault(Number value) {
+  return fmt::format("{}", value);
+}
 
 using MatcherFactory = std::unique_ptr<StereoMatcher> (*)(const MatcherOptions& options,
                                                           MatcherParams& params);

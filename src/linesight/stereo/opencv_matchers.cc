@@ -217,16 +217,16 @@ class OpenCvSgbmWls final : public StereoMatcher {
 std::vector<MatcherParamDoc> OpenCvBlockMatcherParamDocs() {
   const BmDefaults d;
   return {
-      {"block", "int", fmt::format("{}", d.block), "matched block side (px, odd, 5..255)"},
-      {"uniqueness", "int", fmt::format("{}", d.uniqueness),
+      {"block", "int", ParamDefault(d.block), "matched block side (px, odd, 5..255)"},
+      {"uniqueness", "int", ParamDefault(d.uniqueness),
        "uniqueness ratio (%): the winner must beat every other disparity by this margin"},
-      {"texture", "int", fmt::format("{}", d.texture),
+      {"texture", "int", ParamDefault(d.texture),
        "minimum texture of a block (sum of prefiltered values); below it no estimate"},
-      {"speckle_window", "int", fmt::format("{}", d.speckle_window),
+      {"speckle_window", "int", ParamDefault(d.speckle_window),
        "largest blob of similar disparities removed as a speckle (px); 0 = off"},
-      {"speckle_range", "int", fmt::format("{}", d.speckle_range),
+      {"speckle_range", "int", ParamDefault(d.speckle_range),
        "largest disparity step inside one speckle blob (px)"},
-      {"prefilter_cap", "int", fmt::format("{}", d.prefilter_cap),
+      {"prefilter_cap", "int", ParamDefault(d.prefilter_cap),
        "clip of the normalised prefiltered image (1..63)"},
   };
 }
@@ -236,20 +236,20 @@ std::vector<MatcherParamDoc> OpenCvSgbmParamDocs() {
   return {
       {"mode", "sgbm|hh|3way|hh4", d.mode,
        "OpenCV StereoSGBM mode: MODE_SGBM, MODE_HH (full 8 paths), MODE_SGBM_3WAY, MODE_HH4"},
-      {"block", "int", fmt::format("{}", d.block), "matched block side (px, odd, 1..31)"},
-      {"p1", "int", fmt::format("{}", SgbmDefaults::P1(d.block)),
+      {"block", "int", ParamDefault(d.block), "matched block side (px, odd, 1..31)"},
+      {"p1", "int", ParamDefault(SgbmDefaults::P1(d.block)),
        "penalty for a disparity change of +-1 px between neighbours; default 8*block^2"},
-      {"p2", "int", fmt::format("{}", SgbmDefaults::P2(d.block)),
+      {"p2", "int", ParamDefault(SgbmDefaults::P2(d.block)),
        "penalty for a larger disparity change (> p1); default 32*block^2"},
-      {"uniqueness", "int", fmt::format("{}", d.uniqueness),
+      {"uniqueness", "int", ParamDefault(d.uniqueness),
        "uniqueness ratio (%): the winner must beat every other disparity by this margin"},
-      {"speckle_window", "int", fmt::format("{}", d.speckle_window),
+      {"speckle_window", "int", ParamDefault(d.speckle_window),
        "largest blob of similar disparities removed as a speckle (px); 0 = off"},
-      {"speckle_range", "int", fmt::format("{}", d.speckle_range),
+      {"speckle_range", "int", ParamDefault(d.speckle_range),
        "largest disparity step inside one speckle blob (px)"},
-      {"disp12_max_diff", "int", fmt::format("{}", d.disp12_max_diff),
+      {"disp12_max_diff", "int", ParamDefault(d.disp12_max_diff),
        "largest left-right check difference (px); < 0 = no check"},
-      {"prefilter_cap", "int", fmt::format("{}", d.prefilter_cap),
+      {"prefilter_cap", "int", ParamDefault(d.prefilter_cap),
        "clip of the x-derivative prefilter (>= 1)"},
   };
 }
@@ -257,9 +257,9 @@ std::vector<MatcherParamDoc> OpenCvSgbmParamDocs() {
 std::vector<MatcherParamDoc> OpenCvSgbmWlsParamDocs() {
   const WlsDefaults d;
   std::vector<MatcherParamDoc> docs = OpenCvSgbmParamDocs();
-  docs.push_back({"lambda", "number", fmt::format("{}", d.lambda),
+  docs.push_back({"lambda", "number", ParamDefault(d.lambda),
                   "WLS smoothness weight (>= 0): larger = smoother map"});
-  docs.push_back({"sigma", "number", fmt::format("{}", d.sigma),
+  docs.push_back({"sigma", "number", ParamDefault(d.sigma),
                   "WLS colour sigma (> 0): how strongly image edges stop the smoothing"});
   return docs;
 }

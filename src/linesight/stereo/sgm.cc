@@ -410,32 +410,32 @@ SgmOptions ReadSgmOptions(const MatcherOptions& options, MatcherParams& params,
 }
 
 std::vector<MatcherParamDoc> SgmParamDocs(const SgmOptions& d) {
-  auto text = [](auto value) { return fmt::format("{}", value); };
   return {
-      {"census_width", "int", text(d.census_width),
+      {"census_width", "int", ParamDefault(d.census_width),
        "census window width (px, odd, 1..15; width*height - 1 <= 64 bits)"},
-      {"census_height", "int", text(d.census_height), "census window height (px, odd, 1..15)"},
-      {"bt_weight", "int", text(d.bt_weight),
+      {"census_height", "int", ParamDefault(d.census_height),
+       "census window height (px, odd, 1..15)"},
+      {"bt_weight", "int", ParamDefault(d.bt_weight),
        "weight of the truncated Birchfield-Tomasi term (eighths of a cost unit per grey level); "
        "0 = census only"},
-      {"bt_truncation", "int", text(d.bt_truncation),
+      {"bt_truncation", "int", ParamDefault(d.bt_truncation),
        "grey levels at which the Birchfield-Tomasi term saturates (1..255)"},
-      {"paths", "int", text(d.num_paths), "aggregation directions: 4 or 8"},
-      {"p1", "int", text(d.p1), "penalty for a disparity change of +-1 px along a path"},
-      {"p2", "int", text(d.p2), "penalty for a larger disparity change (> p1)"},
-      {"p2_alpha", "int", text(d.p2_gradient_alpha),
+      {"paths", "int", ParamDefault(d.num_paths), "aggregation directions: 4 or 8"},
+      {"p1", "int", ParamDefault(d.p1), "penalty for a disparity change of +-1 px along a path"},
+      {"p2", "int", ParamDefault(d.p2), "penalty for a larger disparity change (> p1)"},
+      {"p2_alpha", "int", ParamDefault(d.p2_gradient_alpha),
        "P2 adapted to the intensity step: P2 * alpha / (alpha + |dI|); 0 = constant P2"},
-      {"uniqueness", "int", text(d.uniqueness_ratio),
+      {"uniqueness", "int", ParamDefault(d.uniqueness_ratio),
        "uniqueness ratio (%) against disparities more than 1 px away; 0 = off"},
       {"subpixel", "none|equiangular|parabola", SubpixelName(d.subpixel),
        "subpixel fit of the winner (equiangular suits census)"},
-      {"lr_max_diff", "int", text(d.lr_max_diff),
+      {"lr_max_diff", "int", ParamDefault(d.lr_max_diff),
        "largest left-right difference of the integer winners (px); -1 = no left-right check"},
-      {"speckle_window", "int", text(d.speckle_window),
+      {"speckle_window", "int", ParamDefault(d.speckle_window),
        "largest blob of similar disparities removed as a speckle (px); 0 = off"},
-      {"speckle_range", "number", text(d.speckle_range),
+      {"speckle_range", "number", ParamDefault(d.speckle_range),
        "largest disparity step inside one speckle blob (px)"},
-      {"median", "bool", d.median ? "true" : "false", "3x3 median over valid neighbours"},
+      {"median", "bool", ParamDefault(d.median), "3x3 median over valid neighbours"},
   };
 }
 
