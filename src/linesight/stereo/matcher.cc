@@ -9,6 +9,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/core/key_value.h"
 #include "linesight/stereo/graph_cut.h"
 #include "linesight/stereo/isgm.h"
 #include "linesight/stereo/opencv_matchers.h"
@@ -135,8 +136,8 @@ bool MatcherParams::GetBool(const std::string& key, bool default_value) {
   Read(key, "bool");
   auto it = params_.find(key);
   if (it == params_.end()) return default_value;
-  if (it->second == "1" || it->second == "true" || it->second == "on") return true;
-  if (it->second == "0" || it->second == "false" || it->second == "off") return false;
+  bool value = false;
+  if (detail::ParseBoolText(it->second, &value)) return value;
   throw UsageError(fmt::format("{}: parameter '{}' = '{}' is not a boolean (expected true/false)",
                                method_, key, it->second));
 }
