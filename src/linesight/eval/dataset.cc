@@ -328,7 +328,15 @@ void LoadMiddlebury2005(StereoScene& scene) {
   CheckSizeMatches(right_gt, right_gt_path, scene.ground_truth, gt_path);
   scene.masks["nonocc"] =
       LeftRightConsistentMask(scene.ground_truth, right_gt, kMiddlebury2005LrTolerancePx);
-  if (IsFile(dir / "dmin.txt")) scene.doffs_px = ReadDmin(dir / "dmin.txt") / kHalfSizeScale;
+  if (IsFile(dir / "dmin.txt")) {
+    // The 2005/2006 sets were taken with a focal length of 3740 px and a baseline of 160 mm at full
+    // size, Z = baseline * f / (d + dmin) (vision.middlebury.edu/stereo/data/scenes2005/ and
+    // scenes2006/); at half size f and dmin halve.
+    constexpr double kFullSizeFocalPx = 3740.0, kBaselineM = 0.160;
+    scene.doffs_px = ReadDmin(dir / "dmin.txt") / kHalfSizeScale;
+    scene.focal_px = kFullSizeFocalPx / kHalfSizeScale;
+    scene.baseline_m = kBaselineM;
+  }
   SetDisparityRange(scene, 0);
 }
 

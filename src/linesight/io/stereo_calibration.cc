@@ -141,6 +141,42 @@ void CheckWritable(const StereoCalibration& c) {
 
 }  // namespace
 
+StereoCalibration RectifiedPinholeCalibration(cv::Size image_size, double focal_px, double cx,
+                                              double cy, double baseline_m, double doffs_px) {
+  for (const double v : {focal_px, cx, cy, baseline_m, doffs_px}) {
+    if (!std::isfinite(v)) {
+      throw InputError(fmt::format(
+          "rectified calibration: f {} px, cx {}, cy {}, baseline {} m, doffs {} px must be finite",
+          focal_px, cx, cy, baseline_m, doffs_px));
+    }
+  }
+  if (!(focal_px > 0.0) || !(baseline_m > 0.0)) {
+    throw InputError(
+        fmt::format("rectified calibration: focal length {} px and baseline {} m must be positive",
+                    focal_px, baseline_m));
+  }
+  const double f = focal_px, b = baseline_m, cx_right = cx + doffs_px;
+  StereoCalibration c;
+  c.image_size = image_size;
+  c.M1 = (cv::Mat_<double>(3, 3) << f, 0, cx, 0, f, cy, 0, 0, 1);
+  c.M2 = (cv::Mat_<double>(3, 3) << f, 0, cx_right, 0, f, cy, 0, 0, 1);
+  c.D1 = cv::Mat::zeros(1, 5, CV_64F);
+  c.D2 = cv::Mat::zeros(1, 5, CV_64F);
+  c.R = cv::Mat::eye(3, 3, CV_64F);
+  c.T = (cv::Mat_<double>(3, 1) << -b, 0, 0);
+  // E = [T]x R; F = K2^-T E K1^-1.
+  c.E = (cv::Mat_<double>(3, 3) << 0, 0, 0, 0, 0, b, 0, -b, 0);
+  c.F = c.M2.inv().t() * c.E * c.M1.inv();
+  c.R1 = cv::Mat::eye(3, 3, CV_64F);
+  c.R2 = cv::Mat::eye(3, 3, CV_64F);
+  c.P1 = (cv::Mat_<double>(3, 4) << f, 0, cx, 0, 0, f, cy, 0, 0, 0, 1, 0);
+  c.P2 = (cv::Mat_<double>(3, 4) << f, 0, cx_right, -f * b, 0, f, cy, 0, 0, 0, 1, 0);
+  // OpenCV's Q (stereoRectify): [1 0 0 -cx; 0 1 0 -cy; 0 0 0 f; 0 0 -1/Tx (cx - cx')/Tx], Tx = -B.
+  c.Q = (cv::Mat_<double>(4, 4) << 1, 0, 0, -cx, 0, 1, 0, -cy, 0, 0, 0, f, 0, 0, 1.0 / b,
+         doffs_px / b);
+  return c;
+}
+
 double StereoCalibration::RectifiedFocal() const {
   LS_CHECK_MSG(P1.type() == CV_64FC1 && P1.rows == 3 && P1.cols == 4,
                "P1 must be a 3x4 CV_64F matrix");

@@ -40,6 +40,14 @@ StereoCalibration DecodeStereoCalibration(const std::string& text, const std::st
 // The YAML text ("%YAML:1.0", image_width, image_height, then the matrices as !!opencv-matrix).
 std::string EncodeStereoCalibration(const StereoCalibration& calib);
 
+// The calibration of an already rectified pinhole pair: identical cameras with focal length f
+// (px), the left principal point (cx, cy), the right camera `baseline_m` to the right and its
+// principal point `doffs_px` further right (Middlebury's doffs: Z = B f / (d + doffs)), no
+// distortion, identity rectification. Throws InputError unless f > 0, baseline_m > 0 and every
+// value is finite.
+StereoCalibration RectifiedPinholeCalibration(cv::Size image_size, double focal_px, double cx,
+                                              double cy, double baseline_m, double doffs_px = 0.0);
+
 // Checks that the calibration matches an image size; throws InputError otherwise.
 void CheckCalibrationMatchesImage(const StereoCalibration& calib, cv::Size image_size,
                                   const std::filesystem::path& calib_path);

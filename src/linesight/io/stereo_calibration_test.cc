@@ -1,5 +1,6 @@
 #include "linesight/io/stereo_calibration.h"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -221,6 +222,34 @@ TEST_F(StereoCalibrationTest, RectifiedFocalAndBaseline) {
   StereoCalibration hand = c;
   hand.P2 = (cv::Mat_<double>(3, 4) << 500, 0, 320, -125, 0, 500, 240, 0, 0, 0, 1, 0);
   EXPECT_DOUBLE_EQ(hand.Baseline(), 0.25);
+}
+
+TEST_F(StereoCalibrationTest, RectifiedPinholeCalibrationProjectsWithMiddleburyDoffs) {
+  // Middlebury's convention: Z = B f / (d + doffs) with d = x_left - x_right.
+  const double f = 999.4, b = 0.193, doffs = 32.8;
+  const StereoCalibration c = RectifiedPinholeCalibration({741, 497}, f, 294.2, 252.5, b, doffs);
+  EXPECT_DOUBLE_EQ(c.RectifiedFocal(), f);
+  EXPECT_NEAR(c.Baseline(), b, 1e-15);
+  const cv::Vec4d point(0.3, -0.2, 3.1, 1.0);
+  const cv::Mat left = c.P1 * cv::Mat(point), right = c.P2 * cv::Mat(point);
+  const double d =
+      left.at<double>(0) / left.at<double>(2) - right.at<double>(0) / right.at<double>(2);
+  EXPECT_NEAR(b * f / (d + doffs), 3.1, 1e-12);
+  // Q maps (x, y, d) back to the point: W = d / B + doffs / B.
+  const cv::Mat q = c.Q * (cv::Mat_<double>(4, 1) << left.at<double>(0) / left.at<double>(2),
+                           left.at<double>(1) / left.at<double>(2), d, 1.0);
+  EXPECT_NEAR(q.at<double>(2) / q.at<double>(3), 3.1, 1e-12);
+  EXPECT_NEAR(q.at<double>(0) / q.at<double>(3), 0.3, 1e-12);
+  ExpectInputError(
+      [] {
+        RectifiedPinholeCalibration({64, 48}, 0.0, 32, 24, 0.1);
+      },
+      {"focal length 0"});
+  ExpectInputError(
+      [] {
+        RectifiedPinholeCalibration({64, 48}, 500, 32, 24, 0.1, NAN);
+      },
+      {"must be finite"});
 }
 
 TEST_F(StereoCalibrationTest, CheckCalibrationMatchesImage) {

@@ -22,27 +22,8 @@ void PlateRig::Check() const {
 
 StereoCalibration PlateRig::Calibration() const {
   Check();
-  const double f = focal_px, b = baseline_m;
-  const double cx = 0.5 * (image_size.width - 1), cy = 0.5 * (image_size.height - 1);
-  StereoCalibration c;
-  c.image_size = image_size;
-  c.M1 = (cv::Mat_<double>(3, 3) << f, 0, cx, 0, f, cy, 0, 0, 1);
-  c.M2 = c.M1.clone();
-  c.D1 = cv::Mat::zeros(1, 5, CV_64F);
-  c.D2 = cv::Mat::zeros(1, 5, CV_64F);
-  c.R = cv::Mat::eye(3, 3, CV_64F);
-  c.T = (cv::Mat_<double>(3, 1) << -b, 0, 0);
-  // E = [T]x R; F = K^-T E K^-1.
-  c.E = (cv::Mat_<double>(3, 3) << 0, 0, 0, 0, 0, b, 0, -b, 0);
-  const cv::Mat k_inv = c.M1.inv();
-  c.F = k_inv.t() * c.E * k_inv;
-  c.R1 = cv::Mat::eye(3, 3, CV_64F);
-  c.R2 = cv::Mat::eye(3, 3, CV_64F);
-  c.P1 = (cv::Mat_<double>(3, 4) << f, 0, cx, 0, 0, f, cy, 0, 0, 0, 1, 0);
-  c.P2 = (cv::Mat_<double>(3, 4) << f, 0, cx, -f * b, 0, f, cy, 0, 0, 0, 1, 0);
-  // OpenCV's Q for CALIB_ZERO_DISPARITY: [1 0 0 -cx; 0 1 0 -cy; 0 0 0 f; 0 0 1/B 0].
-  c.Q = (cv::Mat_<double>(4, 4) << 1, 0, 0, -cx, 0, 1, 0, -cy, 0, 0, 0, f, 0, 0, 1.0 / b, 0);
-  return c;
+  return RectifiedPinholeCalibration(image_size, focal_px, 0.5 * (image_size.width - 1),
+                                     0.5 * (image_size.height - 1), baseline_m);
 }
 
 std::string PlateShapeName(PlateShape shape) {
