@@ -88,7 +88,8 @@ struct StereoScene {
   int min_disparity = 0;     // search range that covers the ground truth
   int num_disparities = 64;  // (from info.txt / calib.txt ndisp / the ground truth's maximum)
   // Metric-depth calibration where the set has one (Middlebury 2014 / ETH3D calib.txt; Middlebury
-  // 2005/2006 with dmin.txt: f = 3740 / 2 px, B = 160 mm, doffs = dmin / 2); 0 if unknown. Z = baseline_m * focal_px / (d + doffs_px).
+  // 2005/2006 with dmin.txt: f = 3740 / 2 px, B = 160 mm, doffs = dmin / 2); 0 if unknown. Z =
+  // baseline_m * focal_px / (d + doffs_px).
   double focal_px = 0, baseline_m = 0, doffs_px = 0;
 };
 

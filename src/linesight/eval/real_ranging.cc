@@ -75,8 +75,8 @@ cv::Mat SurfaceLabels(const cv::Mat& gt, const cv::Mat& evaluate, double joint_r
         const cv::Point p = stack.back();
         stack.pop_back();
         const float d = gt.at<float>(p);
-        for (const cv::Point step : {cv::Point(1, 0), cv::Point(-1, 0), cv::Point(0, 1),
-                                     cv::Point(0, -1)}) {
+        for (const cv::Point step :
+             {cv::Point(1, 0), cv::Point(-1, 0), cv::Point(0, 1), cv::Point(0, -1)}) {
           const cv::Point q = p + step;
           if (q.x < 0 || q.y < 0 || q.x >= gt.cols || q.y >= gt.rows) continue;
           if (!evaluate.at<uchar>(q) || labels.at<int>(q) != 0) continue;
@@ -152,10 +152,10 @@ std::vector<RealRegion> DeriveRealRegions(const StereoScene& scene,
   }
   const cv::Mat& gt = scene.ground_truth;
   const auto nonocc = scene.masks.find("nonocc");
-  const cv::Mat& evaluate =
-      nonocc != scene.masks.end() ? nonocc->second : scene.masks.at("all");
+  const cv::Mat& evaluate = nonocc != scene.masks.end() ? nonocc->second : scene.masks.at("all");
   int count = 0;
-  const cv::Mat labels = SurfaceLabels(gt, evaluate, options.joint_relative, scene.doffs_px, &count);
+  const cv::Mat labels =
+      SurfaceLabels(gt, evaluate, options.joint_relative, scene.doffs_px, &count);
   std::vector<int> area(size_t(count) + 1, 0);
   for (int y = 0; y < labels.rows; ++y) {
     for (int x = 0; x < labels.cols; ++x) ++area[size_t(labels.at<int>(y, x))];
@@ -248,9 +248,9 @@ RealRangingReport RunRealRangingStudy(const RealRangingOptions& options, Progres
     pipeline.input_rectified = true;
     pipeline.min_depth_m = DepthOf(scene, d_max) / 1.1;
     pipeline.max_depth_m = DepthOf(scene, std::max(d_min, 0.0)) * 1.1;
-    const StereoCalibration calib = RectifiedPinholeCalibration(
-        scene.left.size(), scene.focal_px, 0.5 * (scene.left.cols - 1),
-        0.5 * (scene.left.rows - 1), scene.baseline_m, scene.doffs_px);
+    const StereoCalibration calib =
+        RectifiedPinholeCalibration(scene.left.size(), scene.focal_px, 0.5 * (scene.left.cols - 1),
+                                    0.5 * (scene.left.rows - 1), scene.baseline_m, scene.doffs_px);
     const RangingPipeline chain(calib, pipeline);
     if (report.method.empty()) {
       report.method = chain.method();
@@ -310,9 +310,12 @@ std::vector<std::string> SetsOf(const std::vector<RealRegionResult>& regions) {
 }
 
 nlohmann::json SummaryJson(const RealRangingReport::Summary& s) {
-  return {{"regions", s.regions},         {"measured", s.measured},
-          {"median_abs_relative", s.median_abs}, {"p95_abs_relative", s.p95_abs},
-          {"mean_relative", s.mean},      {"coverage_2sigma", s.coverage}};
+  return {{"regions", s.regions},
+          {"measured", s.measured},
+          {"median_abs_relative", s.median_abs},
+          {"p95_abs_relative", s.p95_abs},
+          {"mean_relative", s.mean},
+          {"coverage_2sigma", s.coverage}};
 }
 
 }  // namespace
@@ -357,7 +360,8 @@ nlohmann::json RealRangingReport::ToJson() const {
   j["scenes"] = scenes;
   j["elapsed_s"] = elapsed_s;
   j["summary"] = SummaryJson(Summarise());
-  for (const std::string& set : SetsOf(regions)) j["summary_by_set"][set] = SummaryJson(Summarise("", set));
+  for (const std::string& set : SetsOf(regions))
+    j["summary_by_set"][set] = SummaryJson(Summarise("", set));
   for (const std::string kind : {"object", "surface"}) {
     j["summary_by_kind"][kind] = SummaryJson(Summarise(kind));
   }

@@ -4,7 +4,8 @@
 // Scenes: every scene under the root that has a metric calibration (eval/dataset.h: Middlebury
 // 2014 and ETH3D calib.txt, Middlebury 2005/2006 half size with dmin.txt). Regions come from the
 // ground truth alone (DeriveRealRegions):
-//  * the truth is cut into smooth surfaces: 4-connected pixels of the non-occluded ground truth whose
+//  * the truth is cut into smooth surfaces: 4-connected pixels of the non-occluded ground truth
+//  whose
 //    disparities differ by at most joint_px;
 //  * "object": a surface of at least min_region_pixels whose box grown like the studies' ROIs
 //    (GrowRoi: 15 % + 6 px) holds (almost: max_nearer_fraction) nothing nearer than the surface's
@@ -36,18 +37,18 @@ namespace linesight {
 class ProgressBar;
 
 struct RealRegionOptions {
-  double joint_relative = 0.01;   // neighbours within this relative depth share a surface
+  double joint_relative = 0.01;  // neighbours within this relative depth share a surface
   // An object's ROI may hold this share of pixels of other surfaces nearer than its median (the
   // fringe of the ground truth at its outline).
   double max_nearer_fraction = 0.05;
-  int min_region_pixels = 1500;   // smallest surface taken as a region
-  double min_fill = 0.2;          // an object fills at least this share of its ROI
+  int min_region_pixels = 1500;    // smallest surface taken as a region
+  double min_fill = 0.2;           // an object fills at least this share of its ROI
   double max_roi_fraction = 0.25;  // an object's ROI covers at most this share of the image
-  int patch_px = 61;              // side of a surface patch
-  int min_patch_px = 21;          // smallest patch side
-  int max_objects = 6;            // per scene, largest surfaces first
-  int max_surfaces = 4;           // per scene, largest surfaces first
-  int truth_smoothing_px = 2;     // radius of the mean before the truth's maximum
+  int patch_px = 61;               // side of a surface patch
+  int min_patch_px = 21;           // smallest patch side
+  int max_objects = 6;             // per scene, largest surfaces first
+  int max_surfaces = 4;            // per scene, largest surfaces first
+  int truth_smoothing_px = 2;      // radius of the mean before the truth's maximum
 
   void Check() const;
 };
