@@ -391,7 +391,7 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
                                 " --roi " + roi;
   const fs::path json_off = dir_ / "range_off.json";
   const RunResult off =
-      Run("range" + pair_args + " --ranging surface_refinement=0 --json " + json_off.string());
+      Run("range" + pair_args + " --ranging refine=0 --json " + json_off.string());
   ASSERT_EQ(off.exit_code, 0) << off.err;
   EXPECT_NE(Slurp(json_off).find("\"surface_check_px\": null"), std::string::npos)
       << Slurp(json_off);
@@ -402,19 +402,20 @@ TEST_F(CliTest, RangeOnAnIndependentlyRenderedRectifiedPair) {
   ASSERT_NO_THROW(parsed = nlohmann::json::parse(to_stdout.out)) << to_stdout.out;
   EXPECT_EQ(parsed["obstacles"].size(), 1u) << to_stdout.out;
   EXPECT_NE(to_stdout.err.find("distance_m"), std::string::npos) << to_stdout.err;
-  const RunResult fraction = Run("range" + pair_args + " --ranging surface_refinement=2.5");
+  const RunResult fraction = Run("range" + pair_args + " --ranging edge_min_rows=2.5");
   EXPECT_NE(fraction.exit_code, 0);
-  EXPECT_NE(fraction.err.find("surface_refinement=2.5"), std::string::npos) << fraction.err;
-  // The fit's settings: the old check-only default runs; bad values are refused by name.
+  EXPECT_NE(fraction.err.find("edge_min_rows=2.5"), std::string::npos) << fraction.err;
+  // The fit's settings: the matched reading alone on every surface pixel; bad values are refused
+  // by name.
   const RunResult old_default =
       Run("range" + pair_args +
-          " --ranging surface_refinement=3 --ranging surface_gradient_ratio=0"
+          " --ranging refine=0 --ranging surface_gradient_ratio=0"
           " --ranging surface_interior=0 --ranging surface_min_ncc=0.9"
           " --ranging fill_rejected_holes=0 --ranging largest_mode_without_bodies=0");
   EXPECT_EQ(old_default.exit_code, 0) << old_default.err;
   // Comma-separated, as --param: the same settings in one option give the same report.
   const RunResult joined = Run("range" + pair_args +
-                               " --ranging surface_refinement=3,surface_gradient_ratio=0"
+                               " --ranging refine=0,surface_gradient_ratio=0"
                                " --ranging surface_interior=0,surface_min_ncc=0.9"
                                " --ranging fill_rejected_holes=0,largest_mode_without_bodies=0");
   EXPECT_EQ(joined.exit_code, 0) << joined.err;

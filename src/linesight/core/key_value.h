@@ -125,8 +125,8 @@ class OptionTable {
   }
 
   // Applies key -> value text to `options`. Throws UsageError naming `flag` and the setting with
-  // the value it expected ("--ranging 'surface_refinement=2.5': expected a whole number in [0,
-  // 3]"), or, for an unknown key, the valid keys.
+  // the value it expected ("--ranging 'edge_min_rows=2.5': expected a whole number in [1,
+  // 1000000]"), or, for an unknown key, the valid keys.
   void Apply(std::string_view flag, const std::map<std::string, std::string>& values,
              T* options) const {
     for (const auto& [key, text] : values) {

@@ -26,9 +26,6 @@ void RangingPipelineOptions::Check() const {
   CheckOption(model_relative_sigma >= 0.0 && model_relative_sigma < 0.5,
               "RangingPipelineOptions.model_relative_sigma", model_relative_sigma,
               "must be in [0, 0.5)");
-  CheckOption(surface_refinement >= 0 && surface_refinement <= 3,
-              "RangingPipelineOptions.surface_refinement", surface_refinement,
-              "must be 0, 1, 2 or 3");
   CheckOption(surface_disagreement_weight >= 0.0 && surface_disagreement_weight <= 4.0,
               "RangingPipelineOptions.surface_disagreement_weight", surface_disagreement_weight,
               "must be in [0, 4]");
@@ -150,77 +147,70 @@ std::vector<RangeResult> RangingPipeline::RangeAuto(const RangingFrame& frame) c
   return results;
 }
 
-void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* result) const {
-  if (!result->ok() || options_.surface_refinement == 0 || frame.left_rectified.empty()) return;
-  auto refine = [&](const SurfaceRefinementOptions& surface) {
+std::vector<Measurement> RangingPipeline::MeasureNearestSurface(const RangingFrame& frame,
+                                                                const RangeResult& result) const {
+  auto fit = [&](const SurfaceRefinementOptions& surface) {
     return RefineSurfaceDisparity(frame.left_rectified, frame.right_rectified,
-                                  result->surface_pixels, result->surface_disparity_px, surface);
+                                  result.surface_pixels, result.surface_disparity_px, surface);
   };
-  SurfaceRefinement refined = refine(options_.surface);
-  const double w = options_.surface_disagreement_weight;
-  // Takes disparity d from a second measurement (`kind`) with its own noise `sigma_px`; `check`,
-  // its disagreement with the matched map, joins sigma_d with weight w.
-  auto adopt = [&](double d, double check, double sigma_px, const char* kind) {
-    result->surface_check_px = check;
-    const double sigma_d = std::sqrt(result->disparity_sigma_px * result->disparity_sigma_px +
-                                     sigma_px * sigma_px + w * w * check * check);
-    result->refined = true;
-    result->refinement = kind;
-    result->disparity_px = d;
-    result->disparity_sigma_px = sigma_d;
-    result->distance_m = geometry_.DepthFromDisparity(d);
-    result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
-  };
-  if (options_.surface_refinement != 3 && refined.ok) {
-    const double offset = options_.surface_refinement == 2
-                              ? result->disparity_px - result->surface_disparity_px
-                              : 0.0;
-    const double d = refined.disparity_px + offset;
-    if (d + geometry_.disparity_offset_px > 0.0) {
-      adopt(d, refined.disparity_px - result->surface_disparity_px, refined.sigma_px, "surface");
-      return;
-    }
-  }
-  // No clean pixels to fit: the surface's silhouette edges, measured on each view. Taken only when
-  // they put the surface nearer than the matched map does. Every visible edge of an obstacle lies
-  // at or behind its nearest point, so an edge reading is a lower bound of the nearest surface's
-  // disparity; the matched map reads small fronts too far (the damper's end cap at 4.5 m by
-  // 0.3-0.5 px), and where an edge reads farther than the map, it is not at the nearest point (an
-  // insulator's round sheds: their left and right ends lie behind the front of the rim; `eval
-  // ranging --runs 4`: insulator 3.5-5.5 m up to +1.4 % farther when taken either way).
-  if (options_.surface_refinement != 3 && options_.edge_fallback && !refined.ok &&
-      !(refined.at_search_edge && refined.ncc >= options_.surface.min_ncc)) {
-    const EdgeDisparity edges =
-        MeasureEdgeDisparity(frame.left_rectified, frame.right_rectified, result->surface_pixels,
-                             result->disparity_px, options_.edges);
-    if (edges.ok && edges.disparity_px > result->disparity_px &&
-        edges.disparity_px + geometry_.disparity_offset_px > 0.0) {
-      // The edges and d_near measure the same point: their difference is the disagreement.
-      adopt(edges.disparity_px, edges.disparity_px - result->disparity_px,
-            std::max(edges.sigma_px, options_.ranging.disparity_sigma_floor_px), "edges");
-      return;
-    }
-  }
-  // A check only: the distance stays the matched one. A correlation that is highest at an end of
-  // the search window (and high enough there to be a surface's) says the two differ by at least
-  // the window: that end is used. Where the clean pixels cannot be fitted (too few of them, or no
-  // correlation peak above the gate), all the surface's pixels still can be, as a check.
+  // A correlation highest at an end of its search window, and high enough there to be a
+  // surface's: the readings differ by at least the window, and that end is the check.
   auto at_edge = [&](const SurfaceRefinement& f) {
     return f.at_search_edge && f.ncc >= options_.surface.min_ncc;
   };
-  if (!refined.ok && !at_edge(refined) &&
-      (options_.surface.gradient_ratio > 0 || options_.surface.interior_only)) {
-    SurfaceRefinementOptions all = options_.surface;
-    all.gradient_ratio = 0;
-    all.interior_only = false;
-    refined = refine(all);
+  auto positive = [&](double d) { return d + geometry_.disparity_offset_px > 0.0; };
+  std::vector<Measurement> out;
+  const SurfaceRefinement refined = fit(options_.surface);
+  const double surface_disagreement = refined.disparity_px - result.surface_disparity_px;
+  // The surface's clean pixels: the refined surface plus the matched offset of d_near above the
+  // surface's mean (the nearest-point definition kept).
+  const double offset = result.disparity_px - result.surface_disparity_px;
+  if (refined.ok && positive(refined.disparity_px + offset)) {
+    out.push_back({Measurement::Role::kEstimate, "surface", refined.disparity_px + offset,
+                   refined.sigma_px, surface_disagreement});
+    return out;
   }
-  const bool edge = at_edge(refined);
-  if (!refined.ok && !edge) return;
-  result->surface_check_px = refined.disparity_px - result->surface_disparity_px;
-  const double sigma_d = std::hypot(result->disparity_sigma_px, w * result->surface_check_px);
-  result->disparity_sigma_px = sigma_d;
-  result->sigma_m = geometry_.DepthSigma(result->distance_m, sigma_d);
+  SurfaceRefinement check = refined;
+  if (!refined.ok && !at_edge(refined)) {
+    // No clean pixels to fit: the silhouette edges, measured on each view.
+    const EdgeDisparity edges =
+        MeasureEdgeDisparity(frame.left_rectified, frame.right_rectified, result.surface_pixels,
+                             result.disparity_px, options_.edges);
+    if (edges.ok && positive(edges.disparity_px)) {
+      out.push_back({Measurement::Role::kLowerBound, "edges", edges.disparity_px,
+                     std::max(edges.sigma_px, options_.ranging.disparity_sigma_floor_px),
+                     edges.disparity_px - result.disparity_px});
+    }
+    // Every pixel of the surface can still be fitted, as a check.
+    if (options_.surface.gradient_ratio > 0 || options_.surface.interior_only) {
+      SurfaceRefinementOptions all = options_.surface;
+      all.gradient_ratio = 0;
+      all.interior_only = false;
+      check = fit(all);
+    }
+  }
+  if (check.ok || at_edge(check)) {
+    out.push_back({Measurement::Role::kCheck, "surface", check.disparity_px, 0.0,
+                   check.disparity_px - result.surface_disparity_px});
+  }
+  return out;
+}
+
+void RangingPipeline::RefineSurface(const RangingFrame& frame, RangeResult* result) const {
+  if (!result->ok() || !options_.refine_on_images || frame.left_rectified.empty()) return;
+  const FusedSurface fused = FuseNearestSurface(result->disparity_px, result->disparity_sigma_px,
+                                                MeasureNearestSurface(frame, *result),
+                                                options_.surface_disagreement_weight);
+  if (!std::isfinite(fused.disagreement_px)) return;  // nothing measured: the matched reading stays
+  result->surface_check_px = fused.disagreement_px;
+  result->disparity_sigma_px = fused.sigma_px;
+  if (fused.adopted) {
+    result->refined = true;
+    result->refinement = fused.kind;
+    result->disparity_px = fused.disparity_px;
+    result->distance_m = geometry_.DepthFromDisparity(fused.disparity_px);
+  }
+  result->sigma_m = geometry_.DepthSigma(result->distance_m, fused.sigma_px);
 }
 
 void RangingPipeline::AddModelUncertainty(RangeResult* result) const {

@@ -13,6 +13,7 @@
 
 #include "linesight/geometry/depth.h"
 #include "linesight/io/stereo_calibration.h"
+#include "linesight/ranging/measurement.h"
 #include "linesight/ranging/obstacle_finder.h"
 #include "linesight/ranging/ranging.h"
 #include "linesight/ranging/surface_refinement.h"
@@ -55,31 +56,20 @@ struct RangingPipelineOptions {
   // obstacle's nearest surface (subpixel locking, foreshortened thin rims). Chosen so that the
   // +-2 sigma coverage of `linesight eval ranging` reaches 90 %.
   double model_relative_sigma = 0.006;
-  // Measure each result's nearest surface a second time on the rectified images
-  // (RefineSurfaceDisparity: one disparity for the surface pixels by NCC, nothing outside them):
-  // 0 = off; 1 = the refined surface disparity is the result; 2 (default) = the refined surface
-  // disparity plus the matched map's offset of d_near above the surface's mean (the nearest-point
-  // definition kept); 3 = a check only: the distance stays the matched one. In every mode the
-  // disagreement, surface_disagreement_weight * (refined - matched), joins sigma_d in quadrature
-  // (where the two measurements of one surface disagree, one of them is off by about the
-  // difference), and in 1 and 2 the refinement's noise does too. Where the refinement cannot
-  // correct (too few clean pixels: see SurfaceRefinementOptions::gradient_ratio, interior_only) it
-  // is run again on every surface pixel as a check.
-  // Why 2 is the default: the matcher flattens small fronts (the insulator's
-  // rims at 1-2.5 m read 0.5 px too far; `eval ranging`, 4 runs, 0.5-5 m, estimated calibration,
-  // cells off by > 1 %: 3 with mode 3, 1 with mode 2), and on `eval plates` the matched map's
-  // near percentile reads flat faces at 5 m 1-1.4 % too near (82 -> 90 of 90 cells within 1 %).
-  // Mode 2 fits the interior pixels only: fitted on every surface pixel, the rims' horizontal
-  // edges turn the estimated calibration's vertical error into 1.8 % too near.
-  int surface_refinement = 2;
-  double surface_disagreement_weight = 1.0;  // in [0, 4]
+  // Measure each result's nearest surface a second time on the rectified images and fuse the
+  // readings with the matched map's (MeasureNearestSurface, FuseNearestSurface in measurement.h):
+  // the surface fit on the surface's clean pixels (RefineSurfaceDisparity), where it cannot correct
+  // the silhouette edges (MeasureEdgeDisparity) and the fit on every surface pixel as a check.
+  // Why: the matcher flattens small fronts (the insulator's rims at 1-2.5 m read 0.5 px too far,
+  // the damper's textureless end cap from 3.5 m on 0.3-0.5 px; `eval ranging --runs 4`, 0.5-5 m,
+  // estimated calibration: 3 cells off by more than 1 % with the matched map alone, 1 with the fit,
+  // damper 4.5 m +1.50 -> +0.16 % with the edges), and the matched map's near percentile reads flat
+  // faces at 5 m 1-1.4 % too near (`eval plates`: 82 -> 90 of 90 cells within 1 %). false = the
+  // matched map's reading alone.
+  bool refine_on_images = true;
+  // w of the fusion rule: the readings' disagreement joins sigma_d with this weight. In [0, 4].
+  double surface_disagreement_weight = 1.0;
   SurfaceRefinementOptions surface;
-  // In modes 1 and 2, where the surface's clean pixels cannot be fitted (too few of them, or no
-  // correlation peak above the gate), measure the disparity of the surface's silhouette edges on
-  // each view instead (MeasureEdgeDisparity) and take it as the result when it succeeds and reads
-  // nearer than the matched map (see RefineSurface). The damper's textureless end cap from 3.5 m on
-  // (`eval ranging --runs 4`, estimated calibration: 4.5 m +1.50 -> +0.16 %).
-  bool edge_fallback = true;
   EdgeDisparityOptions edges;
   RectifyOptions rectify;
   // Their min/max depth are overwritten by the depths of the searched disparity range (the working
@@ -119,7 +109,14 @@ class RangingPipeline {
   std::vector<RangeResult> RangeAuto(const RangingFrame& frame) const;
   // Adds model_relative_sigma to a RangeObstacle result (RangeRois and RangeAuto do it already).
   void AddModelUncertainty(RangeResult* result) const;
-  // Applies surface_refinement to an ok result (RangeRois and RangeAuto do it already).
+  // The second readings of an ok result's nearest surface on the frame's images, in the fusion
+  // rule's order of precedence (measurement.h): the surface fit as an estimate if it can correct;
+  // else the silhouette edges as a lower bound and the fit (on every surface pixel when the clean
+  // ones did not suffice) as a check.
+  std::vector<Measurement> MeasureNearestSurface(const RangingFrame& frame,
+                                                 const RangeResult& result) const;
+  // Fuses them into an ok result (FuseNearestSurface; RangeRois and RangeAuto do it already):
+  // distance, sigma, refined, refinement and surface_check_px.
   void RefineSurface(const RangingFrame& frame, RangeResult* result) const;
 
   const StereoCalibration& rectified_calibration() const { return rectified_calibration_; }

@@ -28,9 +28,6 @@ TEST(RangingPipelineOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
   EXPECT_THROW(o.Check(), OptionError);
   o.model_relative_sigma = 0.0;
   EXPECT_NO_THROW(o.Check());
-  o.surface_refinement = 4;
-  EXPECT_THROW(o.Check(), OptionError);
-  o.surface_refinement = 2;
   o.surface_disagreement_weight = -0.5;
   EXPECT_THROW(o.Check(), OptionError);
   o.surface_disagreement_weight = 1.0;
@@ -104,7 +101,7 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
     return p.RangeRois(frame, {roi}).front();
   };
   RangingPipelineOptions unchecked = options;
-  unchecked.surface_refinement = 0;
+  unchecked.refine_on_images = false;
   const RangeResult r0 = range_with(unchecked);
   ASSERT_TRUE(r0.ok()) << r0.reason;
   EXPECT_FALSE(r0.refined);
@@ -131,16 +128,8 @@ TEST(RangingPipelineTest, RangesOnTheCheckedDisparitiesOfIsgm) {
   // all the surface's pixels is a check.
   RangingPipelineOptions strict = options;
   strict.surface.gradient_ratio = 1e-3;
-  strict.edge_fallback = false;
+  strict.edges.min_rows = 1000000;  // and no edges
   expect_check_only(range_with(strict));
-
-  // Mode 3 measures the surface a second time as a check only, on the same clean pixels.
-  RangingPipelineOptions checking = options;
-  checking.surface_refinement = 3;
-  const RangeResult rc = range_with(checking);
-  expect_check_only(rc);
-  // Both measure the same surface the same way.
-  EXPECT_EQ(rc.surface_check_px, r.surface_check_px);
 }
 
 // Every obstacle type at 0.3 m, the near end of the working range, in the default scene (the
@@ -188,14 +177,8 @@ TEST(RangingPipelineTest, ATexturelessFrontIsMeasuredAtItsOutline) {
   const double truth = scene.obstacles.front().distance_m;
   EXPECT_NEAR(r.distance_m, truth, 0.01 * truth);
   EXPECT_LE(std::abs(r.distance_m - truth), 2 * r.sigma_m);
-  // Without the edges: the matched map's distance, farther.
-  options.edge_fallback = false;
-  const RangingPipeline without(sim::MakeStereoCalibration(scene_options.rig), options);
-  const RangeResult m = without.RangeRois(frame, {roi}).front();
-  ASSERT_TRUE(m.ok()) << m.reason;
-  EXPECT_NE(m.refinement, "edges");
-  EXPECT_EQ(m.disparity_px, r.matched_disparity_px);
-  EXPECT_GT(m.distance_m, r.distance_m);
+  // The matched map alone reads it farther.
+  EXPECT_GT(pipeline.geometry().DepthFromDisparity(r.matched_disparity_px), r.distance_m);
 }
 
 }  // namespace

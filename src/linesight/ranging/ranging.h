@@ -132,11 +132,12 @@ struct RangeResult {
   // (MeasureEdgeDisparity on its silhouette edges); empty when not refined.
   std::string refinement;
   double matched_disparity_px = 0.0;
-  // Photometric surface disparity minus the matched surface mean (px) when RangingPipeline
-  // measured the surface a second time (RangingPipelineOptions::surface_refinement 1..3), NaN
-  // otherwise; with refinement "edges", the edges' disparity minus the matched d_near (both the
-  // nearest point). When the result was not refined it may be the end of the search window where
-  // the correlation was highest (the photometric peak lies at or beyond it).
+  // The disagreement of the second reading that decided (Measurement::disagreement_px, see
+  // measurement.h) when RangingPipeline measured the surface again, NaN otherwise: the photometric
+  // surface disparity minus the matched surface mean, or with refinement "edges" the edges'
+  // disparity minus the matched d_near (both the nearest point). When the result was not refined
+  // it may be the end of the search window where the correlation was highest (the photometric
+  // peak lies at or beyond it).
   double surface_check_px = std::numeric_limits<double>::quiet_NaN();
 
   bool ok() const { return status == RangeStatus::kOk; }

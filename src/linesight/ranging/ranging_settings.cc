@@ -34,11 +34,11 @@ OptionTable<RangingPipelineOptions> MakeRangingSettingsTable() {
       .Add("model_relative_sigma", OptionField(&O::model_relative_sigma), R::ClosedOpen(0, 0.5),
            "relative sigma added for calibration and matcher bias")
       .Add("search_from_zero", OptionField(&O::search_from_zero), "match from disparity 0")
-      .Add("surface_refinement", OptionField(&O::surface_refinement), R::Closed(0, 3),
-           "0 off; 1 the refined surface disparity; 2 refined + the matched offset of d99; 3 "
-           "check only (the distance stays matched)")
+      .Add("refine", OptionField(&O::refine_on_images),
+           "measure the nearest surface again on the images (surface fit, silhouette edges) and "
+           "fuse the readings")
       .Add("surface_disagreement_weight", OptionField(&O::surface_disagreement_weight),
-           R::Closed(0, 4), "weight of refined - matched in sigma_d")
+           R::Closed(0, 4), "weight of the readings' disagreement in sigma_d")
       .Add("surface_band_relative",
            OptionField(&O::ranging, &RangingOptions::surface_band_relative), R::OpenClosed(0, 0.2),
            "the surface: pixels within this relative depth of the nearest point")
@@ -51,8 +51,6 @@ OptionTable<RangingPipelineOptions> MakeRangingSettingsTable() {
            R::Closed(3, 1000000), "fewest clean pixels for the fit to set the distance")
       .Add("surface_interior", OptionField(&O::surface, &SurfaceRefinementOptions::interior_only),
            "fit only pixels whose four neighbours are on the surface")
-      .Add("edge_fallback", OptionField(&O::edge_fallback),
-           "silhouette edges where the fit cannot correct")
       .Add("edge_min_rows", OptionField(&O::edges, &EdgeDisparityOptions::min_rows),
            R::Closed(1, 1000000), "edge rows per end")
       .Add("edge_min_contrast", OptionField(&O::edges, &EdgeDisparityOptions::min_contrast),

@@ -26,14 +26,13 @@ TEST(RangingSettings, EveryKeyOfTheCommandLineIsInTheTable) {
                                          "checked",
                                          "model_relative_sigma",
                                          "search_from_zero",
-                                         "surface_refinement",
+                                         "refine",
                                          "surface_disagreement_weight",
                                          "surface_band_relative",
                                          "surface_gradient_ratio",
                                          "surface_min_ncc",
                                          "surface_min_pixels",
                                          "surface_interior",
-                                         "edge_fallback",
                                          "edge_min_rows",
                                          "edge_min_contrast",
                                          "edge_row_extension",
@@ -48,14 +47,14 @@ TEST(RangingSettings, EveryKeyOfTheCommandLineIsInTheTable) {
 TEST(RangingSettings, KeysSetTheirMembers) {
   RangingPipelineOptions o;
   ApplyRangingSettings("--ranging",
-                       {"near_percentile=0.95,silhouette_margin_x_px=2", "checked=0",
-                        "surface_refinement=3", "surface_gradient_ratio=0", "surface_interior=0",
-                        "edge_min_rows=6", "edge_max_slope=0.5", "surface_band_relative=0.02"},
+                       {"near_percentile=0.95,silhouette_margin_x_px=2", "checked=0", "refine=0",
+                        "surface_gradient_ratio=0", "surface_interior=0", "edge_min_rows=6",
+                        "edge_max_slope=0.5", "surface_band_relative=0.02"},
                        &o);
   EXPECT_EQ(o.ranging.near_percentile, 0.95);
   EXPECT_EQ(o.ranging.silhouette_margin_x_px, 2);
   EXPECT_FALSE(o.range_on_checked_disparity);
-  EXPECT_EQ(o.surface_refinement, 3);
+  EXPECT_FALSE(o.refine_on_images);
   EXPECT_EQ(o.surface.gradient_ratio, 0.0);
   EXPECT_FALSE(o.surface.interior_only);
   EXPECT_EQ(o.edges.min_rows, 6);
@@ -68,10 +67,11 @@ TEST(RangingSettings, KeysSetTheirMembers) {
 TEST(RangingSettings, ErrorsNameTheSettingAndWhatIsAccepted) {
   RangingPipelineOptions o;
   try {
-    ApplyRangingSettings("--ranging", {"surface_refinement=2.5"}, &o);
+    ApplyRangingSettings("--ranging", {"edge_min_rows=2.5"}, &o);
     FAIL() << "no throw";
   } catch (const UsageError& e) {
-    EXPECT_STREQ(e.what(), "--ranging 'surface_refinement=2.5': expected a whole number in [0, 3]");
+    EXPECT_STREQ(e.what(),
+                 "--ranging 'edge_min_rows=2.5': expected a whole number in [1, 1000000]");
   }
   try {
     ApplyRangingSettings("--ranging", {"near=1"}, &o);
