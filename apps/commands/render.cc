@@ -10,11 +10,13 @@
 #include "cli.h"
 #include "commands.h"
 #include "linesight/core/error.h"
+#include "linesight/core/progress.h"
 #include "linesight/core/timer.h"
 #include "linesight/io/disparity_io.h"
 #include "linesight/io/image_io.h"
 #include "linesight/io/json_io.h"
 #include "linesight/sim/power_line_scene.h"
+#include "linesight/sim/power_line_sequence.h"
 
 namespace linesight::cli {
 namespace {
@@ -51,6 +53,8 @@ int RunRender(int argc, char** argv) {
   std::optional<std::uint64_t> noise_seed;
   bool no_towers = false;
   int boards = 0, boards_left_only = 0, boards_right_only = 0;
+  std::optional<int> sequence_frames;
+  sim::PowerLineSequenceOptions sequence_options;
   app.add_option("--out", out_dir, "output folder (created if missing)")->required();
   app.add_option("--seed", seed, "scene seed (textures, clouds) and default noise seed")
       ->capture_default_str();
@@ -94,8 +98,56 @@ int RunRender(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--board", board_text, "chessboard COLSxROWS:SQUARE_M (inner corners, metres)")
       ->capture_default_str();
+  app.add_option("--sequence", sequence_frames,
+                 "render a moving sequence instead: the robot rides toward the seed's obstacles; "
+                 "N frames (0 = the whole approach), written as left_NNNN.png, right_NNNN.png, "
+                 "truth.jsonl");
+  app.add_option("--speed", sequence_options.speed_mps,
+                 "sequence: robot speed along the line (m/s)")
+      ->capture_default_str();
+  app.add_option("--fps", sequence_options.fps, "sequence: frame rate (Hz)")->capture_default_str();
+  app.add_option("--num-obstacles", sequence_options.num_obstacles,
+                 "sequence: obstacles on the line (types and gaps from --seed)")
+      ->capture_default_str();
   app.add_option("--json", json_path, "machine-readable report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {
+    if (sequence_frames) {
+      if (!obstacles_text.empty() || boards + boards_left_only + boards_right_only > 0) {
+        throw UsageError("--sequence draws its obstacles from --seed: drop --obstacles/--boards");
+      }
+      options.towers = !no_towers;
+      sequence_options.scene = options;
+      sequence_options.seed = seed;
+      Stopwatch watch;
+      const sim::PowerLineSequence sequence(sequence_options);
+      const int count =
+          *sequence_frames == 0 ? sequence.size() : std::min(*sequence_frames, sequence.size());
+      CheckOption(*sequence_frames >= 0, "--sequence", *sequence_frames, "must be >= 0");
+      ProgressBar bar(count, "render");
+      sim::WritePowerLineSequence(out_dir, sequence, count, [&](int, int) { bar.Advance(); });
+      bar.Finish();
+      std::fprintf(stderr,
+                   "render: %d frames (%.1f s at %.3g m/s, %.3g fps) in %.1f s, written to %s\n",
+                   count, sequence.TimestampOf(count - 1), sequence_options.speed_mps,
+                   sequence_options.fps, watch.ElapsedMs() / 1000.0, out_dir.c_str());
+      for (const sim::SequenceLayoutEntry& e : sequence.layout()) {
+        std::fprintf(stdout, "%-10s centre at %.3f m of arc from the start\n",
+                     sim::ObstacleTypeName(e.type).c_str(), e.arc_m);
+      }
+      if (!json_path.empty()) {
+        nlohmann::json report;
+        report["out"] = out_dir;
+        report["frames"] = count;
+        report["seed"] = seed;
+        nlohmann::json layout = nlohmann::json::array();
+        for (const sim::SequenceLayoutEntry& e : sequence.layout()) {
+          layout.push_back({{"type", sim::ObstacleTypeName(e.type)}, {"arc_m", e.arc_m}});
+        }
+        report["layout"] = layout;
+        WriteJson(json_path, report);
+      }
+      return;
+    }
     options.seed = seed;
     options.sensor.noise_seed = noise_seed;
     options.towers = !no_towers;

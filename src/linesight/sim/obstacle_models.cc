@@ -1,6 +1,7 @@
 // Geometry of the obstacles on a conductor: Stockbridge damper, suspension clamp and insulator
 // string (ObstacleType, power_line_scene.h), built from the analytic shapes of ray_tracing.h in an
 // obstacle's local frame.
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -135,3 +136,19 @@ void AddObstacle(ObstacleType type, const LocalFrame& f, double r, int id,
 }
 
 }  // namespace linesight::sim::detail
+
+namespace linesight::sim {
+
+std::array<double, 2> ObstacleAlongExtent(ObstacleType type) {
+  switch (type) {
+    case ObstacleType::kDamper:  // the weights' end caps, 0.125 + 0.085 m behind, + 0.100 m ahead
+      return {-0.210, 0.225};
+    case ObstacleType::kSuspensionClamp:  // the cast body, 0.190 m long
+      return {-0.095, 0.095};
+    case ObstacleType::kInsulatorString:  // the disc rims, 255 mm across
+      return {-0.1275, 0.1275};
+  }
+  return {0.0, 0.0};
+}
+
+}  // namespace linesight::sim

@@ -44,6 +44,9 @@ Mat3 RotationX(double a) {
 Mat3 RotationY(double a) {
   return {{std::cos(a), 0, std::sin(a)}, {0, 1, 0}, {-std::sin(a), 0, std::cos(a)}};
 }
+Mat3 RotationZ(double a) {
+  return {{std::cos(a), -std::sin(a), 0}, {std::sin(a), std::cos(a), 0}, {0, 0, 1}};
+}
 
 // The world frame: origin at the left camera centre, y down along gravity, z horizontal along the
 // line. Conductor c follows a catenary whose lowest point is half-way to the next tower.
@@ -56,6 +59,9 @@ class LineGeometry {
     const double beta = std::atan(std::sinh(h_low_ / a_));
     left_from_world_ =
         detail::Multiply(RotationY(o.conductor_yaw_rad), RotationX(beta + o.conductor_pitch_rad));
+    if (o.conductor_roll_rad != 0.0) {
+      left_from_world_ = detail::Multiply(RotationZ(o.conductor_roll_rad), left_from_world_);
+    }
     origin0_ =
         left_from_world_.ApplyTransposed({o.conductor_offset_x_m, o.conductor_offset_y_m, 0.0});
   }
@@ -313,9 +319,25 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
   // Place obstacles nearest first: a farther obstacle can never hide a nearer one's nearest pixel.
   std::vector<size_t> order(options.obstacles.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return options.obstacles[a].distance_m < options.obstacles[b].distance_m;
-  });
+  auto order_key = [&](size_t i) {
+    return options.obstacles[i].arc_m.value_or(options.obstacles[i].distance_m);
+  };
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return order_key(a) < order_key(b); });
+  model.arc.assign(options.obstacles.size(), 0.0);
+  // Arcs are counted from the point of conductor 0 nearest to the left camera centre (the world
+  // origin): golden-section search of |P(h)| near h = 0.
+  double h_lo = -2.0, h_hi = 2.0;
+  for (int i = 0; i < 100; ++i) {
+    const double a = h_hi - 0.618033988749895 * (h_hi - h_lo);
+    const double b = h_lo + 0.618033988749895 * (h_hi - h_lo);
+    if (detail::Norm(line.Point(0, a)) < detail::Norm(line.Point(0, b))) {
+      h_hi = b;
+    } else {
+      h_lo = a;
+    }
+  }
+  const double arc_origin = line.Arc(0.5 * (h_lo + h_hi));
   const double radius = options.conductor_radius_m;
   const Vec3 w = poses.rectified_left.camera_from_scene.r2;
   std::vector<std::vector<Shape>> placed(options.obstacles.size());
@@ -331,6 +353,11 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
       AddObstacle(spec.type, FrameOnConductor(line, spec.conductor, arc), radius, id, &shapes);
       return shapes;
     };
+    if (spec.arc_m) {  // placed on the line, its distance is whatever it is
+      placed[index] = build(arc_origin + *spec.arc_m);
+      model.arc[index] = *spec.arc_m;
+      continue;
+    }
     // Start from the arc where the analytic nearest surface is at the requested depth, then slide
     // until the nearest VISIBLE pixel is (a safeguarded Newton iteration; depth grows with arc).
     const double slope = std::max(0.2, Dot(w, line.Tangent(line.HorizontalAt(spec.distance_m))));
@@ -383,6 +410,13 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
                       ObstacleTypeName(spec.type), spec.distance_m));
     }
     placed[index] = shapes;
+    model.arc[index] = best_arc - arc_origin;
+  }
+  for (int k = 0; k <= 410; ++k) {
+    const double arc = -0.5 + 0.05 * k;
+    const Vec3 p = line.Point(0, line.HorizontalAt(arc_origin + arc));
+    const Vec3 x = poses.rectified_left.camera_from_scene.Apply(p - poses.rectified_left.centre);
+    model.conductor_axis.push_back({arc, cv::Point3d(x.x, x.y, x.z)});
   }
 
   // Final scene with every obstacle.

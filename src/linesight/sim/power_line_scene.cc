@@ -71,6 +71,7 @@ PowerLineSceneRenderer::PowerLineSceneRenderer(const PowerLineSceneOptions& opti
   result.disparity = disparity;
   result.surface_class = surface_class;
   result.obstacle_mask = ids;
+  result.conductor_axis = model.conductor_axis;
   for (size_t i = 0; i < options.obstacles.size(); ++i) {
     const int id = static_cast<int>(i) + 1;
     const VisibleStats stats =
@@ -85,6 +86,8 @@ PowerLineSceneRenderer::PowerLineSceneRenderer(const PowerLineSceneOptions& opti
     o.nearest_pixel = stats.nearest;
     o.box = stats.box;
     o.visible_pixels = stats.pixels;
+    o.arc_m = model.arc[i];
+    o.near_arc_m = o.arc_m + ObstacleAlongExtent(o.type)[0];
     result.obstacles.push_back(o);
   }
 
@@ -144,7 +147,9 @@ nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles) {
                     {"surface_min_depth_m", o.surface_min_depth_m},
                     {"nearest_pixel", {o.nearest_pixel.x, o.nearest_pixel.y}},
                     {"box", {o.box.x, o.box.y, o.box.width, o.box.height}},
-                    {"visible_pixels", o.visible_pixels}});
+                    {"visible_pixels", o.visible_pixels},
+                    {"arc_m", o.arc_m},
+                    {"near_arc_m", o.near_arc_m}});
   }
   return {{"distance_definition", detail::kDistanceDefinition}, {"obstacles", list}};
 }

@@ -143,7 +143,17 @@ struct ObstacleSpec {
   ObstacleType type = ObstacleType::kDamper;
   double distance_m = 1.5;  // requested true distance (see the file comment), 0.2..80 m
   int conductor = 0;        // index of the conductor it sits on (0 = the one the robot rides)
+  // Set: the obstacle's centre sits at this arc length along its conductor (m, from the point of
+  // conductor 0 nearest to the left camera centre, see PowerLineScene::conductor_axis) and
+  // distance_m is not
+  // used; the distance it has is measured (+inf when no pixel of it is visible). This is how a
+  // moving sequence places its obstacles. In [-5, 0.9 * span_ahead_m].
+  std::optional<double> arc_m;
 };
+
+// Extent of an obstacle of `type` along its conductor, relative to its centre (m): {behind, ahead},
+// behind < 0 < ahead. The near end of an obstacle centred at arc s lies at s + behind.
+std::array<double, 2> ObstacleAlongExtent(ObstacleType type);
 
 // "damper:1.5,clamp:3,insulator:4.5" (type:distance_m[:conductor], comma separated). Throws
 // InputError naming the offending entry.
@@ -185,6 +195,9 @@ struct PowerLineSceneOptions {
   double conductor_yaw_rad = 0.30;
   // Climb of the line at the camera: rotation about the camera x axis (rad, > 0 rises), |.| <= 0.5.
   double conductor_pitch_rad = 0.0;
+  // Roll of the rig about its optical axis (rad, > 0 turns the image clockwise), |.| <= 0.3: the
+  // sway of a robot hanging from the line.
+  double conductor_roll_rad = 0.0;
   // Conductor radius (m); ACSR "Drake" is 28.1 mm across.
   double conductor_radius_m = 0.014;
   // Catenary parameter a = H / w (m): horizontal tension over weight per metre; the sag at mid-span
@@ -237,6 +250,19 @@ struct RenderedObstacle {
   cv::Point nearest_pixel;           // rectified left pixel realising distance_m
   cv::Rect box;            // bounding box of its visible pixels in the rectified left image
   int visible_pixels = 0;  // number of rectified left pixels showing it
+  // Arc length along its conductor (m, from the point of conductor 0 nearest to the left camera
+  // centre, where the robot is) of its centre and of
+  // its near end (centre + ObstacleAlongExtent(type)[0]): how far along the line the robot has to
+  // travel before it reaches the obstacle.
+  double arc_m = 0.0;
+  double near_arc_m = 0.0;
+};
+
+// A point of a conductor's axis in the rectified left camera frame with its arc length (m, 0 at the
+// point of the conductor nearest to the left camera centre).
+struct ConductorAxisPoint {
+  double arc_m = 0.0;
+  cv::Point3d rect;  // X_rect (m)
 };
 
 struct PowerLineScene {
@@ -250,6 +276,8 @@ struct PowerLineScene {
   cv::Mat surface_class;  // rectified left, CV_8UC1: SurfaceClass of each pixel
   std::vector<RenderedObstacle> obstacles;  // one per spec, in spec order
   cv::Mat rectified_left, rectified_right;  // only with render_rectified_pair, CV_8UC3 BGR
+  // Axis of conductor 0 (the robot's), sampled every 0.05 m of arc from -0.5 m to 20 m.
+  std::vector<ConductorAxisPoint> conductor_axis;
 };
 
 // Renders the scene. Throws OptionError for invalid options, InputError when an obstacle cannot be

@@ -108,6 +108,10 @@ void PowerLineSceneOptions::Check() const {
                 "must be shorter than 0.9 * span_ahead_m (the conductor ends at the next tower)");
     CheckOption(o.conductor >= 0 && o.conductor < num_conductors, (name + ".conductor").c_str(),
                 o.conductor, "must be a conductor index in [0, num_conductors)");
+    if (o.arc_m) {
+      CheckOption(std::isfinite(*o.arc_m) && *o.arc_m >= -5 && *o.arc_m <= 0.9 * span_ahead_m,
+                  (name + ".arc_m").c_str(), *o.arc_m, "must be in [-5, 0.9 * span_ahead_m] m");
+    }
   }
   CheckOption(std::fabs(conductor_offset_x_m) <= 2, "PowerLineSceneOptions.conductor_offset_x_m",
               conductor_offset_x_m, "must be in [-2, 2] m");
@@ -127,6 +131,8 @@ void PowerLineSceneOptions::Check() const {
               conductor_yaw_rad, "must be in [-0.5, 0.5] rad");
   CheckOption(std::fabs(conductor_pitch_rad) <= 0.5, "PowerLineSceneOptions.conductor_pitch_rad",
               conductor_pitch_rad, "must be in [-0.5, 0.5] rad");
+  CheckOption(std::fabs(conductor_roll_rad) <= 0.3, "PowerLineSceneOptions.conductor_roll_rad",
+              conductor_roll_rad, "must be in [-0.3, 0.3] rad");
   CheckOption(sag_parameter_m >= 50 && sag_parameter_m <= 1e6,
               "PowerLineSceneOptions.sag_parameter_m", sag_parameter_m, "must be in [50, 1e6] m");
   CheckOption(span_ahead_m >= 10 && span_ahead_m <= 1000, "PowerLineSceneOptions.span_ahead_m",

@@ -37,6 +37,8 @@ struct PowerLineSceneModel {
   RigPoses poses;
   RenderScene scene;
   std::vector<double> surface_min_depth;  // per obstacle spec: min Z_rect over its surface
+  std::vector<double> arc;                // per obstacle spec: arc length of its centre (m)
+  std::vector<ConductorAxisPoint> conductor_axis;  // conductor 0, rectified left frame
 };
 PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& options);
 

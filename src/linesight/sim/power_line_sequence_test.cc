@@ -1,0 +1,124 @@
+#include "linesight/sim/power_line_sequence.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "linesight/core/error.h"
+
+namespace linesight::sim {
+namespace {
+
+PowerLineSequenceOptions FastSequence(std::uint64_t seed) {
+  PowerLineSequenceOptions o;
+  o.seed = seed;
+  o.scene.sensor.supersampling = 1;
+  o.fps = 2.0;
+  return o;
+}
+
+TEST(PowerLineSequence, LayoutStartsAtTheGapAndFramesCoverTheApproach) {
+  const PowerLineSequence sequence(FastSequence(4));
+  const auto& o = sequence.options();
+  ASSERT_EQ(sequence.layout().size(), 3u);
+  const auto& first = sequence.layout().front();
+  EXPECT_NEAR(first.arc_m + ObstacleAlongExtent(first.type)[0], o.start_gap_m, 1e-12);
+  for (size_t i = 1; i < sequence.layout().size(); ++i) {
+    const auto& a = sequence.layout()[i - 1];
+    const auto& b = sequence.layout()[i];
+    const double gap =
+        (b.arc_m + ObstacleAlongExtent(b.type)[0]) - (a.arc_m + ObstacleAlongExtent(a.type)[1]);
+    EXPECT_GE(gap, o.min_spacing_m - 1e-12);
+    EXPECT_LE(gap, o.max_spacing_m + 1e-12);
+  }
+  // (6 - 0.4) / 0.3 * 2 = 37.3 -> 38 frames; the last one leaves the first obstacle >= 0.4 m ahead.
+  EXPECT_EQ(sequence.size(), 38);
+  const double last_gap = o.start_gap_m - sequence.TravelledAt(sequence.size() - 1);
+  EXPECT_GE(last_gap, o.end_gap_m - 1e-9);
+  EXPECT_LT(last_gap, o.end_gap_m + o.speed_mps / o.fps);
+}
+
+TEST(PowerLineSequence, FramesMoveTheObstaclesAndJitterThePose) {
+  const PowerLineSequence sequence(FastSequence(4));
+  const PowerLineSceneOptions a = sequence.FrameOptions(0);
+  const PowerLineSceneOptions b = sequence.FrameOptions(10);
+  ASSERT_EQ(a.obstacles.size(), b.obstacles.size());
+  for (size_t i = 0; i < a.obstacles.size(); ++i) {
+    EXPECT_NEAR(*a.obstacles[i].arc_m - *b.obstacles[i].arc_m, 10 * 0.3 / 2.0, 1e-12);
+  }
+  EXPECT_NE(a.conductor_pitch_rad, b.conductor_pitch_rad);
+  EXPECT_NE(a.conductor_roll_rad, b.conductor_roll_rad);
+  EXPECT_NE(a.conductor_offset_y_m, b.conductor_offset_y_m);
+  EXPECT_LE(std::fabs(a.conductor_pitch_rad), 0.3 * M_PI / 180 + 1e-12);
+  EXPECT_LE(std::fabs(b.conductor_offset_y_m - PowerLineSceneOptions{}.conductor_offset_y_m),
+            0.004 + 1e-12);
+  EXPECT_NE(a.sensor.noise_seed, b.sensor.noise_seed);
+  // Another seed lays the line out differently.
+  const PowerLineSequence other(FastSequence(5));
+  bool differs = false;
+  for (size_t i = 0; i < 3; ++i) {
+    differs |= other.layout()[i].type != sequence.layout()[i].type ||
+               other.layout()[i].arc_m != sequence.layout()[i].arc_m;
+  }
+  EXPECT_TRUE(differs);
+}
+
+TEST(PowerLineSequence, RenderedTruthApproachesAndFramesAreIndependent) {
+  PowerLineSequenceOptions o = FastSequence(2);
+  o.num_obstacles = 1;
+  o.start_gap_m = 3.0;
+  o.end_gap_m = 1.0;
+  o.scene.towers = false;
+  o.scene.cloud_cover = 0.0;
+  const PowerLineSequence sequence(o);
+  const int last = sequence.size() - 1;
+  const PowerLineScene far = sequence.Render(0);
+  const PowerLineScene near = sequence.Render(last);
+  ASSERT_EQ(far.obstacles.size(), 1u);
+  EXPECT_NEAR(far.obstacles[0].near_arc_m, 3.0, 1e-9);
+  EXPECT_NEAR(near.obstacles[0].near_arc_m, 3.0 - sequence.TravelledAt(last), 1e-9);
+  ASSERT_GT(far.obstacles[0].visible_pixels, 0);
+  ASSERT_GT(near.obstacles[0].visible_pixels, far.obstacles[0].visible_pixels);
+  // The straight distance follows the arc: the line heads away from the camera at a small angle.
+  EXPECT_LT(near.obstacles[0].distance_m, far.obstacles[0].distance_m - 1.5);
+  EXPECT_GT(far.obstacles[0].distance_m, 0.85 * far.obstacles[0].near_arc_m);
+  // The conductor axis is sampled along the arc and lies in front of the camera ahead.
+  ASSERT_FALSE(far.conductor_axis.empty());
+  for (const ConductorAxisPoint& p : far.conductor_axis) {
+    if (p.arc_m > 0.5) {
+      EXPECT_GT(p.rect.z, 0.0);
+    }
+  }
+  // Frame `last` rendered on its own equals the same frame rendered after others.
+  const PowerLineScene again = sequence.Render(last);
+  EXPECT_EQ(cv::norm(again.left, near.left, cv::NORM_INF), 0.0);
+  EXPECT_EQ(again.obstacles[0].distance_m, near.obstacles[0].distance_m);
+  // Truth JSON names the obstacle, its arc and straight distances.
+  const nlohmann::json truth =
+      SequenceFrameTruthToJson(last, sequence.TimestampOf(last), sequence.TravelledAt(last), near);
+  EXPECT_EQ(truth["obstacles"][0]["type"], ObstacleTypeName(sequence.layout()[0].type));
+  EXPECT_DOUBLE_EQ(truth["obstacles"][0]["distance_m"].get<double>(), near.obstacles[0].distance_m);
+}
+
+TEST(PowerLineSequence, RejectsBadOptionsNamingTheField) {
+  auto expect_rejected = [](auto change, const std::string& field) {
+    PowerLineSequenceOptions o;
+    change(o);
+    try {
+      const PowerLineSequence sequence(o);
+      ADD_FAILURE() << "accepted " << field;
+    } catch (const OptionError& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  };
+  expect_rejected([](auto& o) { o.speed_mps = 0; }, "speed_mps");
+  expect_rejected([](auto& o) { o.fps = -1; }, "fps");
+  expect_rejected([](auto& o) { o.end_gap_m = 7; }, "start_gap_m");
+  expect_rejected([](auto& o) { o.num_obstacles = 9; }, "num_obstacles");
+  expect_rejected([](auto& o) { o.max_spacing_m = 0.5; }, "max_spacing_m");
+  expect_rejected([](auto& o) { o.bounce_m = 1; }, "bounce_m");
+  expect_rejected([](auto& o) { o.scene.span_ahead_m = 12; }, "span_ahead_m");
+}
+
+}  // namespace
+}  // namespace linesight::sim
