@@ -1,0 +1,168 @@
+#include "linesight/line/conductor.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+#include <opencv2/imgproc.hpp>
+
+#include <gtest/gtest.h>
+
+#include "linesight/core/error.h"
+#include "linesight/ranging/pipeline.h"
+#include "linesight/sim/power_line_sequence.h"
+
+namespace linesight {
+namespace {
+
+sim::PowerLineSequenceOptions FastSequence(std::uint64_t seed) {
+  sim::PowerLineSequenceOptions o;
+  o.seed = seed;
+  o.scene.sensor.supersampling = 1;
+  return o;
+}
+
+// Largest distance of the fitted axis from the true axis over arcs [from, to] (m), and the arc
+// error at the true point of arc `at`.
+struct AxisError {
+  double max_offset_m = 0, arc_error_m = 0;
+};
+AxisError CompareAxis(const ConductorModel& model, const sim::PowerLineScene& scene, double from,
+                      double to) {
+  AxisError e;
+  for (const sim::ConductorAxisPoint& p : scene.conductor_axis) {
+    if (p.arc_m < from || p.arc_m > to) continue;
+    const LinePosition at = model.Locate(p.rect);
+    if (std::getenv("DUMP") && std::fmod(p.arc_m + 1e-6, 0.5) < 0.01)
+      std::printf("  arc %.2f off %.4f down %.4f side %.4f z %.2f\n", p.arc_m, at.offset_m,
+                  at.down_m, at.side_m, p.rect.z);
+    e.max_offset_m = std::max(e.max_offset_m, at.offset_m);
+    e.arc_error_m = std::max(e.arc_error_m, std::fabs(at.arc_m - p.arc_m));
+  }
+  return e;
+}
+
+StereoGeometry TrueGeometry(const sim::PowerLineScene& scene) {
+  return GeometryFromCalibration(scene.calibration);
+}
+
+// Exact disparities: no edge fattening, no matching noise.
+ConductorOptions Exact() {
+  ConductorOptions o;
+  o.fattening_px = 0;
+  return o;
+}
+
+TEST(ConductorTest, FollowsTheTrueAxisOnExactDisparities) {
+  for (std::uint64_t seed : {3u, 5u}) {
+    const sim::PowerLineSequence sequence(FastSequence(seed));
+    for (int index : {0, sequence.size() / 2}) {
+      const sim::PowerLineScene scene = sequence.Render(index);
+      const ConductorModel model = FitConductor(scene.disparity, TrueGeometry(scene), Exact());
+      if (!model.ok()) {
+        std::printf("%s\n", model.ToJson().dump(1).c_str());
+      }
+      ASSERT_TRUE(model.ok()) << model.reason;
+      const AxisError e = CompareAxis(model, scene, 0.5, 6.0);
+      EXPECT_LT(e.max_offset_m, 0.02);
+      EXPECT_LT(e.arc_error_m, 0.005);
+      EXPECT_NEAR(model.line.radius_m, 0.014, 0.002);
+    }
+  }
+}
+
+TEST(ConductorTest, FollowsTheTrueAxisOnMatchedDisparities) {
+  const sim::PowerLineSequence sequence(FastSequence(7));
+  const sim::PowerLineScene scene = sequence.Render(10);
+  RangingPipelineOptions options;
+  options.threads = 1;
+  const RangingPipeline pipeline(scene.calibration, options);
+  const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+  for (const cv::Mat* d : {&frame.disparity, &frame.checked_disparity}) {
+    const ConductorModel model = FitConductor(*d, pipeline.geometry(), {});
+    ASSERT_TRUE(model.ok()) << model.reason;
+    const AxisError e = CompareAxis(model, scene, 0.5, 6.0);
+    // Arc lengths, which the distances along the line are read from, hold to a few millimetres;
+    // the axis itself to centimetres (the disparity noise of a 14 mm tube far away).
+    EXPECT_LT(e.max_offset_m, 0.1);
+    EXPECT_LT(e.arc_error_m, 0.01);
+  }
+}
+
+// A synthetic rectified disparity map: f = 700 px, B = 0.1 m, principal point at the centre.
+StereoGeometry SyntheticGeometry() { return {700.0, 0.1, 0.0, 376.0, 240.0}; }
+
+// Draws the image of the 3D segment a-b as a tube of `radius` (m) into `disparity`.
+void DrawTube(cv::Mat* disparity, const StereoGeometry& g, cv::Point3d a, cv::Point3d b,
+              double radius) {
+  const int steps = 2000;
+  for (int s = 0; s <= steps; ++s) {
+    const cv::Point3d x = a + (b - a) * (double(s) / steps);
+    if (x.z < 0.2) continue;
+    const cv::Point2d p(g.focal_px * x.x / x.z + g.cx, g.focal_px * x.y / x.z + g.cy);
+    const float d = static_cast<float>(g.DisparityFromDepth(x.z));
+    const int r = std::max(1, int(std::lround(radius * g.focal_px / x.z)));
+    cv::circle(*disparity, cv::Point(int(std::lround(p.x)), int(std::lround(p.y))), r,
+               cv::Scalar(d), cv::FILLED);
+  }
+}
+
+cv::Mat EmptyDisparity() {
+  return cv::Mat(480, 752, CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
+}
+
+TEST(ConductorTest, ASingleSyntheticTubeIsTheConductor) {
+  const StereoGeometry g = SyntheticGeometry();
+  cv::Mat d = EmptyDisparity();
+  DrawTube(&d, g, {0.05, -0.1, 0.3}, {0.6, 0.8, 8.0}, 0.014);
+  const ConductorModel model = FitConductor(d, g, {});
+  ASSERT_TRUE(model.ok()) << model.reason;
+  EXPECT_TRUE(model.others.empty());
+  // The line's nearest point to the camera: the segment's direction and the closest approach.
+  const cv::Vec3d dir = cv::normalize(cv::Vec3d(0.55, 0.9, 7.7));
+  const cv::Vec3d a(0.05, -0.1, 0.3);
+  const double closest = cv::norm(a - a.dot(dir) * dir);
+  EXPECT_NEAR(model.line.closest_approach_m, closest, 0.03);
+  const LinePosition far = model.Locate({0.6, 0.8, 8.0});
+  EXPECT_LT(far.offset_m, 0.05);
+  EXPECT_NEAR(far.arc_m,
+              cv::norm(cv::Vec3d(0.6, 0.8, 8.0)) * dir.dot(cv::normalize(cv::Vec3d(0.6, 0.8, 8.0))),
+              0.05);
+  const nlohmann::json j = model.ToJson();
+  EXPECT_EQ(j["status"], "ok");
+  EXPECT_GT(j["line"]["axis_arc_xyz_m"].size(), 3u);
+}
+
+TEST(ConductorTest, SaysWhyWhenThereIsNoUsableLine) {
+  const StereoGeometry g = SyntheticGeometry();
+  // Nothing in the working range.
+  EXPECT_EQ(FitConductor(EmptyDisparity(), g, {}).status, ConductorStatus::kNoDisparity);
+  // Only a body (a 30 cm box at 2 m): no thin structure.
+  cv::Mat box = EmptyDisparity();
+  box(cv::Rect(300, 200, 105, 105)).setTo(g.DisparityFromDepth(2.0));
+  const ConductorModel body = FitConductor(box, g, {});
+  EXPECT_EQ(body.status, ConductorStatus::kNoConductor);
+  EXPECT_FALSE(body.reason.empty());
+  // A conductor seen end-on: a short stub in the image.
+  cv::Mat stub = EmptyDisparity();
+  DrawTube(&stub, g, {0.05, 0.10, 1.0}, {0.16, 0.31, 3.0}, 0.014);
+  const ConductorModel end_on = FitConductor(stub, g, {});
+  EXPECT_EQ(end_on.status, ConductorStatus::kEndOn) << end_on.reason;
+  // Two conductors crossing in front of the camera, both as near: which one is not clear.
+  cv::Mat crossing = EmptyDisparity();
+  DrawTube(&crossing, g, {-0.3, 0.1, 0.3}, {2.0, 0.6, 8.0}, 0.014);
+  DrawTube(&crossing, g, {0.3, 0.1, 0.3}, {-2.0, 0.6, 8.0}, 0.014);
+  const ConductorModel two = FitConductor(crossing, g, {});
+  EXPECT_EQ(two.status, ConductorStatus::kAmbiguous) << two.reason;
+  EXPECT_FALSE(two.ok());
+}
+
+TEST(ConductorTest, RejectsBadOptionsAndMaps) {
+  ConductorOptions o;
+  o.max_depth_m = 0.1;
+  EXPECT_THROW(FitConductor(EmptyDisparity(), SyntheticGeometry(), o), OptionError);
+  EXPECT_THROW(FitConductor(cv::Mat(10, 10, CV_8UC1), SyntheticGeometry(), {}), InputError);
+}
+
+}  // namespace
+}  // namespace linesight
