@@ -373,6 +373,12 @@ cv::Point2d ConductorCurve::ImagePoint(double tau) const {
   return centre + tau * axis + LateralAt(tau) * normal;
 }
 
+void ConductorCurve::ImageCoordinates(double u, double v, double* tau, double* lateral_px) const {
+  const double du = u - centre.x, dv = v - centre.y;
+  *tau = du * axis.x + dv * axis.y;
+  *lateral_px = du * normal.x + dv * normal.y - LateralAt(*tau);
+}
+
 double ConductorCurve::LateralAt(double tau) const {
   return nu[0] + tau * (nu[1] + tau * (nu[2] + tau * nu[3]));
 }

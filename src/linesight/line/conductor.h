@@ -88,6 +88,8 @@ struct ConductorCurve {
   double closest_approach_m = 0;  // distance of the line from the camera centre
 
   cv::Point2d ImagePoint(double tau) const;
+  // Image arc coordinate of pixel (u, v) and its lateral distance from the curve (px).
+  void ImageCoordinates(double u, double v, double* tau, double* lateral_px) const;
   double LateralAt(double tau) const;  // nu(tau)
   double DisparityAt(double tau) const;
 };

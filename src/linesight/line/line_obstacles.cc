@@ -1,0 +1,284 @@
+#include "linesight/line/line_obstacles.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "linesight/core/disparity.h"
+#include "linesight/core/error.h"
+#include "linesight/ranging/thin_structures.h"
+
+namespace linesight {
+
+namespace {
+
+// A body pixel placed relative to the conductor.
+struct LinePoint {
+  int x, y;
+  float d;
+  double z, arc, offset, down, side;
+};
+
+// How far beyond the observed ends of the conductor's image an obstacle may touch it (px): the
+// obstacle itself hides the conductor behind it.
+constexpr double kHiddenLinePx = 40.0;
+
+const cv::Mat& LineDisparity(const RangingPipeline& pipeline, const RangingFrame& frame,
+                             const LineObstacleOptions& options) {
+  return options.dense_disparity ? frame.disparity : pipeline.RangingDisparity(frame);
+}
+
+// q-quantile (0..1) of values (copied).
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+cv::Point3d BackProjectAt(const StereoGeometry& g, double u, double v, double z) {
+  return {(u - g.cx) * z / g.focal_px, (v - g.cy) * z / g.focal_px, z};
+}
+
+std::vector<LinePoint> CorridorPoints(const cv::Mat& disparity, const cv::Mat& bodies,
+                                      const StereoGeometry& g, const ConductorModel& model,
+                                      const LineObstacleOptions& o, int* body_pixels) {
+  std::vector<LinePoint> points;
+  *body_pixels = 0;
+  for (int y = 0; y < disparity.rows; ++y) {
+    const float* d = disparity.ptr<float>(y);
+    const std::uint8_t* b = bodies.ptr<std::uint8_t>(y);
+    for (int x = 0; x < disparity.cols; ++x) {
+      if (b[x] == 0 || !IsValidDisparity(d[x]) || d[x] + g.disparity_offset_px <= 0) continue;
+      ++*body_pixels;
+      const double z = g.DepthFromDisparity(d[x]);
+      const LinePosition at = model.Locate(BackProjectAt(g, x, y, z));
+      if (std::fabs(at.side_m) > o.corridor_side_m || at.down_m < -o.corridor_above_m ||
+          at.down_m > o.corridor_below_m || at.arc_m < -0.5 || at.arc_m > o.max_arc_m) {
+        continue;
+      }
+      points.push_back({x, y, d[x], z, at.arc_m, at.offset_m, at.down_m, at.side_m});
+    }
+  }
+  return points;
+}
+
+// Runs of points (sorted by arc) separated by gaps longer than cluster_gap_m.
+std::vector<std::vector<LinePoint>> SplitAlongLine(std::vector<LinePoint> points, double gap_m) {
+  std::sort(points.begin(), points.end(),
+            [](const LinePoint& a, const LinePoint& b) { return a.arc < b.arc; });
+  std::vector<std::vector<LinePoint>> runs;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (i == 0 || points[i].arc - points[i - 1].arc > gap_m) runs.emplace_back();
+    runs.back().push_back(points[i]);
+  }
+  return runs;
+}
+
+LineObstacleType Classify(const LineObstacle& o, const LineObstacleOptions& opt) {
+  if (o.above_m >= opt.insulator_min_above_m || o.side_m >= opt.insulator_min_side_m) {
+    return LineObstacleType::kInsulator;
+  }
+  if (o.below_m >= opt.damper_min_below_m) return LineObstacleType::kDamper;
+  return LineObstacleType::kClamp;
+}
+
+// Shape, box and mask of one run; false when it is not an obstacle of this line.
+bool Describe(const std::vector<LinePoint>& run, const ConductorModel& model,
+              const StereoGeometry& g, const LineObstacleOptions& o, LineObstacle* out) {
+  if (static_cast<int>(run.size()) < o.min_pixels) return false;
+  std::vector<double> z, arc, down, up, side;
+  int x0 = run[0].x, x1 = run[0].x, y0 = run[0].y, y1 = run[0].y;
+  for (const LinePoint& p : run) {
+    z.push_back(p.z);
+    arc.push_back(p.arc);
+    down.push_back(p.down);
+    up.push_back(-p.down);
+    side.push_back(std::fabs(p.side));
+    x0 = std::min(x0, p.x);
+    x1 = std::max(x1, p.x);
+    y0 = std::min(y0, p.y);
+    y1 = std::max(y1, p.y);
+  }
+  const double fat = o.conductor.fattening_px * Quantile(z, 0.5) / g.focal_px;
+  // Touching: on the conductor's image band (its half-width plus the fattening and a margin) at a
+  // disparity near the conductor's there. Judged in the image, where the axis is known to a pixel
+  // or two, rather than in 3D, where its depth error far away exceeds an obstacle's size.
+  const ConductorCurve& line = model.line;
+  const double r = line.radius_m > 0 ? line.radius_m : o.conductor.max_radius_m;
+  int attached = 0;
+  for (const LinePoint& p : run) {
+    double tau = 0, lateral = 0;
+    line.ImageCoordinates(p.x, p.y, &tau, &lateral);
+    // Beyond the observed ends too: an obstacle hides the conductor behind it.
+    if (tau < line.tau_min - kHiddenLinePx || tau > line.tau_max + kHiddenLinePx) {
+      continue;
+    }
+    const double half_width = r * (p.d + g.disparity_offset_px) / g.baseline_m +
+                              o.conductor.fattening_px + o.attach_margin_px;
+    const double d_line = line.DisparityAt(tau);
+    attached += std::fabs(lateral) <= half_width &&
+                std::fabs(p.d - d_line) <=
+                    o.attach_disparity_relative * (d_line + g.disparity_offset_px) + 1.0;
+  }
+  if (attached < o.min_attached_pixels) return false;
+  out->pixels = static_cast<int>(run.size());
+  out->length_m = std::max(0.0, Quantile(arc, 0.97) - Quantile(arc, 0.03));
+  out->above_m = std::max(0.0, Quantile(up, 0.97) - fat);
+  out->below_m = std::max(0.0, Quantile(down, 0.97) - fat);
+  out->side_m = std::max(0.0, Quantile(side, 0.97) - fat);
+  out->type = Classify(*out, o);
+  out->box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  out->mask = cv::Mat::zeros(out->box.size(), CV_8UC1);
+  for (const LinePoint& p : run) out->mask.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
+  out->confidence = std::min(1.0, run.size() / (4.0 * o.min_pixels)) *
+                    std::min(1.0, attached / (2.0 * o.min_attached_pixels));
+  // Until ranged: the run's own near end.
+  out->arc_m = Quantile(arc, 0.03);
+  out->distance_m = Quantile(z, 0.03);
+  return true;
+}
+
+// Straight and along-the-line distance from the ranging chain on the obstacle's pixels only.
+void Range(const RangingPipeline& pipeline, const RangingFrame& frame, const cv::Mat& disparity,
+           const ConductorModel& model, cv::Mat* masked, LineObstacle* o) {
+  const StereoGeometry& g = pipeline.geometry();
+  for (int y = 0; y < o->box.height; ++y) {
+    for (int x = 0; x < o->box.width; ++x) {
+      if (o->mask.at<std::uint8_t>(y, x) == 0) continue;
+      const cv::Point p(o->box.x + x, o->box.y + y);
+      masked->at<float>(p) = disparity.at<float>(p);
+    }
+  }
+  const cv::Rect image(0, 0, masked->cols, masked->rows);
+  const cv::Rect roi = (o->box + cv::Size(8, 8) - cv::Point(4, 4)) & image;
+  o->range = RangeObstacle(*masked, g, roi, pipeline.options().ranging);
+  (*masked)(o->box).setTo(std::numeric_limits<float>::infinity());
+  pipeline.RefineSurface(frame, &o->range);
+  pipeline.AddModelUncertainty(&o->range);
+  if (!o->range.ok() || o->range.surface_pixels.empty()) {
+    // Without a measurement the run's own near end stands, with the spread of its depths.
+    o->sigma_m = 0.05 * o->distance_m;
+    o->arc_sigma_m = o->sigma_m;
+    o->confidence *= 0.5;
+    return;
+  }
+  o->distance_m = o->range.distance_m;
+  o->sigma_m = o->range.sigma_m;
+  std::vector<double> arcs;
+  cv::Vec3d tangent(0, 0, 1);
+  for (const cv::Point& p : o->range.surface_pixels) {
+    const LinePosition at = model.Locate(BackProjectAt(g, p.x, p.y, o->distance_m));
+    arcs.push_back(at.arc_m);
+    tangent = at.tangent;
+  }
+  o->arc_m = Quantile(arcs, 0.5);
+  // A depth error moves the near end along the line by sigma / cos(line, optical axis), plus the
+  // spread of the surface's arcs.
+  const double along = o->sigma_m / std::max(0.2, std::fabs(tangent[2]));
+  const double spread = Quantile(arcs, 0.84) - Quantile(arcs, 0.16);
+  o->arc_sigma_m = std::sqrt(along * along + 0.25 * spread * spread / arcs.size());
+}
+
+}  // namespace
+
+std::string LineObstacleTypeName(LineObstacleType type) {
+  switch (type) {
+    case LineObstacleType::kDamper:
+      return "damper";
+    case LineObstacleType::kClamp:
+      return "clamp";
+    case LineObstacleType::kInsulator:
+      return "insulator";
+    case LineObstacleType::kUnknown:
+      return "unknown";
+  }
+  return "unknown";
+}
+
+void LineObstacleOptions::Check() const {
+  conductor.Check();
+  CheckOption(corridor_side_m > 0 && corridor_side_m <= 2, "LineObstacleOptions.corridor_side_m",
+              corridor_side_m, "must be in (0, 2] m");
+  CheckOption(corridor_above_m >= 0 && corridor_above_m <= 5,
+              "LineObstacleOptions.corridor_above_m", corridor_above_m, "must be in [0, 5] m");
+  CheckOption(corridor_below_m >= 0 && corridor_below_m <= 5,
+              "LineObstacleOptions.corridor_below_m", corridor_below_m, "must be in [0, 5] m");
+  CheckOption(max_arc_m > 0, "LineObstacleOptions.max_arc_m", max_arc_m, "must be > 0");
+  CheckOption(cluster_gap_m > 0 && cluster_gap_m < 2, "LineObstacleOptions.cluster_gap_m",
+              cluster_gap_m, "must be in (0, 2) m");
+  CheckOption(attach_margin_px >= 0 && attach_margin_px <= 20,
+              "LineObstacleOptions.attach_margin_px", attach_margin_px, "must be in [0, 20] px");
+  CheckOption(attach_disparity_relative >= 0 && attach_disparity_relative < 0.5,
+              "LineObstacleOptions.attach_disparity_relative", attach_disparity_relative,
+              "must be in [0, 0.5)");
+  CheckOption(min_pixels >= 1, "LineObstacleOptions.min_pixels", min_pixels, "must be >= 1");
+  CheckOption(min_attached_pixels >= 1, "LineObstacleOptions.min_attached_pixels",
+              min_attached_pixels, "must be >= 1");
+  CheckOption(insulator_min_above_m > 0, "LineObstacleOptions.insulator_min_above_m",
+              insulator_min_above_m, "must be > 0");
+  CheckOption(insulator_min_side_m > 0, "LineObstacleOptions.insulator_min_side_m",
+              insulator_min_side_m, "must be > 0");
+  CheckOption(damper_min_below_m > 0, "LineObstacleOptions.damper_min_below_m", damper_min_below_m,
+              "must be > 0");
+}
+
+nlohmann::json LineObstacle::ToJson() const {
+  nlohmann::json j = {{"type", LineObstacleTypeName(type)},
+                      {"arc_m", arc_m},
+                      {"arc_sigma_m", arc_sigma_m},
+                      {"distance_m", distance_m},
+                      {"sigma_m", sigma_m},
+                      {"length_m", length_m},
+                      {"above_m", above_m},
+                      {"below_m", below_m},
+                      {"side_m", side_m},
+                      {"box", {box.x, box.y, box.width, box.height}},
+                      {"pixels", pixels},
+                      {"confidence", confidence},
+                      {"ranged", range.ok()}};
+  if (!range.ok()) j["range_reason"] = range.reason;
+  return j;
+}
+
+nlohmann::json LineObstacles::ToJson() const {
+  nlohmann::json list = nlohmann::json::array();
+  for (const LineObstacle& o : obstacles) list.push_back(o.ToJson());
+  return {{"conductor", conductor.ToJson()},
+          {"obstacles", list},
+          {"body_pixels", body_pixels},
+          {"corridor_pixels", corridor_pixels}};
+}
+
+LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFrame& frame,
+                                const LineObstacleOptions& options,
+                                const ConductorModel* previous) {
+  options.Check();
+  const cv::Mat& disparity = LineDisparity(pipeline, frame, options);
+  const StereoGeometry& g = pipeline.geometry();
+  ThinStructureOptions thin;
+  thin.min_width_m = options.conductor.max_conductor_width_m;
+  thin.min_depth_m = options.conductor.min_depth_m;
+  thin.max_depth_m = options.conductor.max_depth_m;
+  const cv::Mat bodies =
+      BodyMask(disparity, g, cv::Rect(0, 0, disparity.cols, disparity.rows), thin);
+  LineObstacles result;
+  result.conductor = FitConductor(disparity, g, options.conductor, bodies, previous);
+  if (!result.conductor.ok()) return result;
+  std::vector<LinePoint> points =
+      CorridorPoints(disparity, bodies, g, result.conductor, options, &result.body_pixels);
+  result.corridor_pixels = static_cast<int>(points.size());
+  cv::Mat masked(disparity.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
+  for (const std::vector<LinePoint>& run :
+       SplitAlongLine(std::move(points), options.cluster_gap_m)) {
+    LineObstacle o;
+    if (!Describe(run, result.conductor, g, options, &o)) continue;
+    Range(pipeline, frame, disparity, result.conductor, &masked, &o);
+    result.obstacles.push_back(std::move(o));
+  }
+  std::sort(result.obstacles.begin(), result.obstacles.end(),
+            [](const LineObstacle& a, const LineObstacle& b) { return a.arc_m < b.arc_m; });
+  return result;
+}
+
+}  // namespace linesight

@@ -1,0 +1,101 @@
+// Obstacles on the robot's conductor: what is attached to or hangs from the line ahead, its type,
+// and how far along the line and in a straight line it is.
+//
+// Method. The bodies of the disparity map (BodyMask: surfaces wider than a conductor) are
+// back-projected and placed relative to the conductor model (ConductorModel::Locate): arc length
+// along the line, height above or below it, offset to the side. Those inside a corridor around
+// the line are split into obstacles where the arc has a gap; an obstacle must touch the conductor
+// (some of its points within the radius plus a few centimetres of the axis), so a tower or a
+// branch beside the line is not one of its obstacles however near it is. The straight distance is
+// the ranging chain's nearest surface of the obstacle's own pixels (RangeObstacle on a map that
+// holds only them, refined on the images and with its model uncertainty); the distance along the
+// line is the arc of that nearest surface: its pixels back-projected at that distance and located
+// on the line (the near end of the obstacle). The type follows from the obstacle's extent around
+// the line, with the matcher's edge fattening (a few pixels, so Z * px / f metres) removed:
+//   insulator string - reaches far above the line (a vertical string of discs) or wide to the sides
+//   damper           - hangs below the line (the weights on their messenger cable)
+//   clamp            - compact around the line
+// and "unknown" when too little of it is seen to tell.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "linesight/line/conductor.h"
+#include "linesight/ranging/pipeline.h"
+
+namespace linesight {
+
+enum class LineObstacleType { kDamper, kClamp, kInsulator, kUnknown };
+// "damper", "clamp", "insulator", "unknown" (the names of the synthetic scene's types).
+std::string LineObstacleTypeName(LineObstacleType type);
+
+struct LineObstacleOptions {
+  ConductorOptions conductor;
+  // Work on the matcher's dense map (isgm: its SGM stage filled by planes) rather than on the
+  // checked pixels ranging uses: the cast faces of clamps and the interior of a near conductor
+  // are textureless and mostly unchecked, so on the checked map a clamp at 1.2 m shows only its
+  // keeper and the conductor's axis drifts to one edge. Fills far from the line are outside the
+  // corridor and do not matter.
+  bool dense_disparity = true;
+  // The corridor around the conductor (m): to each side, above and below the axis. Above: 1 m
+  // holds the lower part of a suspension string (the shortest strings are ~1 m) but not the tower's
+  // crossarm at its top; below: a damper's weights hang ~0.12 m under the line.
+  double corridor_side_m = 0.35;
+  double corridor_above_m = 1.0;
+  double corridor_below_m = 0.4;
+  double max_arc_m = 8.0;       // farther along the line is not looked at (m)
+  double cluster_gap_m = 0.12;  // a gap this long along the line separates two obstacles (m)
+  // A pixel touches the conductor when it lies on the conductor's image band widened by this
+  // margin (px) at a disparity within this share (plus 1 px) of the conductor's there.
+  double attach_margin_px = 2.0;
+  double attach_disparity_relative = 0.05;
+  int min_pixels = 25;          // fewer body pixels: not an obstacle (too small or too far)
+  int min_attached_pixels = 4;  // fewer touching pixels: not on this line
+  // Type thresholds (m, after removing the fattening): see the file comment.
+  double insulator_min_above_m = 0.25;
+  double insulator_min_side_m = 0.08;
+  double damper_min_below_m = 0.07;
+
+  void Check() const;
+};
+
+struct LineObstacle {
+  LineObstacleType type = LineObstacleType::kUnknown;
+  // Distance along the conductor from the robot (arc length, m) to the obstacle's near end, and
+  // the straight distance to the camera (nearest-surface depth, m), each with its 1-sigma.
+  double arc_m = 0.0, arc_sigma_m = 0.0;
+  double distance_m = 0.0, sigma_m = 0.0;
+  // Extent along the line, above, below and to the side of the axis (m, fattening removed).
+  double length_m = 0.0, above_m = 0.0, below_m = 0.0, side_m = 0.0;
+  cv::Rect box;  // rectified left image
+  cv::Mat mask;  // CV_8UC1 of the box's size, 255 on the obstacle's pixels
+  int pixels = 0;
+  // 0..1: how much of the obstacle supports the result (pixels seen and touching the line, a
+  // ranging measurement) - the share a tracker may rely on.
+  double confidence = 0.0;
+  RangeResult range;  // the ranging chain's result on the obstacle's pixels
+
+  nlohmann::json ToJson() const;
+};
+
+struct LineObstacles {
+  ConductorModel conductor;
+  // The obstacles on the robot's conductor, nearest along the line first (empty unless the
+  // conductor model is ok: without a line there is no "on the line").
+  std::vector<LineObstacle> obstacles;
+  int body_pixels = 0;      // bodies in the working range
+  int corridor_pixels = 0;  // of them, inside the corridor
+
+  nlohmann::json ToJson() const;
+};
+
+// One frame: the conductor model (seeded by `previous` if given) and the obstacles on it.
+LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFrame& frame,
+                                const LineObstacleOptions& options,
+                                const ConductorModel* previous = nullptr);
+
+}  // namespace linesight
