@@ -1,0 +1,54 @@
+// Cost of the line stages on one 752x480 frame of the moving synthetic sequence (seed 3, frame
+// 160: a clamp 1.2 m ahead, a damper and an insulator string farther on, a tower beside the line),
+// on isgm's disparities of that frame: the conductor model alone, and the conductor model with
+// the obstacles on it (their ranging and surface refinement included).
+#include <optional>
+
+#include <benchmark/benchmark.h>
+
+#include "linesight/line/line_obstacles.h"
+#include "linesight/sim/power_line_sequence.h"
+
+namespace linesight {
+namespace {
+
+struct Frame {
+  Frame() {
+    sim::PowerLineSequenceOptions o;
+    o.seed = 3;
+    o.scene.sensor.supersampling = 1;
+    const sim::PowerLineScene scene = sim::PowerLineSequence(o).Render(160);
+    pipeline.emplace(scene.calibration, RangingPipelineOptions{});
+    frame = pipeline->Process(scene.left, scene.right);
+  }
+  std::optional<RangingPipeline> pipeline;
+  RangingFrame frame;
+};
+
+const Frame& TheFrame() {
+  static const Frame frame;
+  return frame;
+}
+
+void BM_FitConductor(benchmark::State& state) {
+  const Frame& f = TheFrame();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(FitConductor(f.frame.disparity, f.pipeline->geometry(), {}));
+  }
+}
+BENCHMARK(BM_FitConductor)->Unit(benchmark::kMillisecond);
+
+void BM_FindLineObstacles(benchmark::State& state) {
+  const Frame& f = TheFrame();
+  std::size_t found = 0;
+  for (auto _ : state) {
+    const LineObstacles result = FindLineObstacles(*f.pipeline, f.frame, {});
+    found = result.obstacles.size();
+    benchmark::DoNotOptimize(found);
+  }
+  state.counters["obstacles"] = static_cast<double>(found);
+}
+BENCHMARK(BM_FindLineObstacles)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace linesight
