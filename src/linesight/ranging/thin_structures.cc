@@ -76,41 +76,52 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
   const cv::Mat view = disparity(outer);
   const cv::Mat band_of = depth_bands.Map(view);
-  std::vector<int> present(size_t(bands), 0);
+  // Each band's bounding box: a band's surface, its closing, distances and growth only reach a
+  // few radii beyond it, so each band is worked on inside that box plus a margin, not on the whole
+  // view (the result is the same pixel for pixel; the reference test checks this).
+  std::vector<cv::Rect> box_of(static_cast<size_t>(bands));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
     for (int x = 0; x < band_of.cols; ++x) {
-      if (b[x] >= 0) present[size_t(b[x])] = 1;
+      if (b[x] >= 0) box_of[size_t(b[x])] |= cv::Rect(x, y, 1, 1);
     }
   }
+  const cv::Rect whole(0, 0, view.cols, view.rows);
+  // The image border is not a surface edge: it clips bodies, it does not make them thin.
+  const bool at_border =
+      outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
   cv::Mat body(view.size(), CV_8U, cv::Scalar(0));
-  cv::Mat surface, padded, distance, seeds, grown;
+  cv::Mat surface, padded, distance, seeds, grown, in_band;
   for (int k = 0; k < bands; ++k) {
-    if (!present[size_t(k)]) continue;
-    cv::inRange(band_of, k - 1, k + 1, surface);
+    if (box_of[size_t(k)].empty()) continue;
+    cv::Rect box = box_of[size_t(k)];
+    if (k > 0) box |= box_of[size_t(k - 1)];
+    if (k + 1 < bands) box |= box_of[size_t(k + 1)];
+    const double radius = radius_of_band(k);
+    const int r = int(std::ceil(radius));
     // Matching leaves small holes inside bodies; a hole must not make a body look thin. Closing
     // with a disc of the body radius fills holes narrower than that radius without widening a
     // conductor.
-    const int close = std::max(3, int(std::round(radius_of_band(k))) | 1);
+    const int close = std::max(3, int(std::round(radius)) | 1);
+    const int reach = close + r + 3;
+    const cv::Rect crop = (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & whole;
+    cv::inRange(band_of(crop), k - 1, k + 1, surface);
     cv::morphologyEx(surface, surface, cv::MORPH_CLOSE,
                      cv::getStructuringElement(cv::MORPH_ELLIPSE, {close, close}));
-    // The image border is not a surface edge: it clips bodies, it does not make them thin.
-    const bool at_border =
-        outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
-    const int pad = at_border ? int(std::ceil(radius_of_band(k))) + 1 : 0;
+    // Beyond the view's own edges the surface continues (replicated), as if the view went on.
+    const int pad = at_border ? r + 1 : 0;
     cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
     cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
-    const double radius = radius_of_band(k);
-    cv::Mat in_band = band_of == k;
-    seeds = (distance(cv::Rect(pad, pad, view.cols, view.rows)) >= radius) & in_band;
+    cv::compare(band_of(crop), k, in_band, cv::CMP_EQ);
+    seeds = (distance(cv::Rect(pad, pad, crop.width, crop.height)) >= radius) & in_band;
     if (cv::countNonZero(seeds) == 0) continue;
+    cv::Mat target = body(crop);
     if (seeds_only) {
-      body |= seeds;
+      target |= seeds;
       continue;
     }
-    const int r = int(std::ceil(radius));
     cv::dilate(seeds, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
-    body |= grown & surface;
+    target |= grown & surface;
   }
   return body(cv::Rect(region.x - outer.x, region.y - outer.y, region.width, region.height))
       .clone();

@@ -1,7 +1,11 @@
 #include "linesight/ranging/thin_structures.h"
 
-#include <gtest/gtest.h>
+#include <random>
 
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/ranging/ranging_test_util.h"
 
@@ -13,6 +17,113 @@ TEST(ThinStructureOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
   EXPECT_THROW((ThinStructureOptions{.min_width_m = 0.0}.Check()), OptionError);
   EXPECT_THROW((ThinStructureOptions{.depth_band_relative = 0.0}.Check()), OptionError);
   EXPECT_THROW((ThinStructureOptions{.min_depth_m = 2.0, .max_depth_m = 1.0}.Check()), OptionError);
+}
+
+// The reference: every depth band worked on over the whole view (what BodyMask computes inside
+// each band's bounding box).
+cv::Mat NaiveBodyMask(const cv::Mat& disparity, const StereoGeometry& geometry,
+                      const cv::Rect& region, const ThinStructureOptions& options,
+                      bool seeds_only) {
+  const cv::Rect image(0, 0, disparity.cols, disparity.rows);
+  const DepthBands bands(geometry, options.min_depth_m, options.max_depth_m,
+                         options.depth_band_relative);
+  auto radius_of_band = [&](int k) {
+    const double d = bands.CentreDisparity(k);
+    return 0.5 * std::max(options.min_width_px,
+                          options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d));
+  };
+  double max_radius = 0.0;
+  for (int y = region.y; y < region.br().y; ++y) {
+    for (int x = region.x; x < region.br().x; ++x) {
+      const float d = disparity.at<float>(y, x);
+      if (IsValidDisparity(d) && d >= bands.d_low && d <= bands.d_high) {
+        max_radius = std::max(max_radius, 0.5 * std::max(options.min_width_px,
+                                                         options.min_width_m * (d + bands.offset) /
+                                                             geometry.baseline_m));
+      }
+    }
+  }
+  const int margin = int(std::ceil(max_radius)) + 2;
+  const cv::Rect outer =
+      (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
+  const cv::Mat band_of = bands.Map(disparity(outer));
+  const bool at_border =
+      outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
+  cv::Mat body(band_of.size(), CV_8U, cv::Scalar(0));
+  for (int k = 0; k < bands.count; ++k) {
+    if (cv::countNonZero(band_of == k) == 0) continue;  // no seeds
+    cv::Mat surface, padded, distance, grown;
+    cv::inRange(band_of, k - 1, k + 1, surface);
+    const int close = std::max(3, int(std::round(radius_of_band(k))) | 1);
+    cv::morphologyEx(surface, surface, cv::MORPH_CLOSE,
+                     cv::getStructuringElement(cv::MORPH_ELLIPSE, {close, close}));
+    const int pad = at_border ? int(std::ceil(radius_of_band(k))) + 1 : 0;
+    cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
+    cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
+    const double radius = radius_of_band(k);
+    const cv::Mat seeds =
+        (distance(cv::Rect(pad, pad, band_of.cols, band_of.rows)) >= radius) & (band_of == k);
+    if (seeds_only) {
+      body |= seeds;
+      continue;
+    }
+    const int r = int(std::ceil(radius));
+    cv::dilate(seeds, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
+    body |= grown & surface;
+  }
+  return body(cv::Rect(region.x - outer.x, region.y - outer.y, region.width, region.height))
+      .clone();
+}
+
+// Random blocks, bars and thin lines at random depths, with holes, touching the image borders.
+cv::Mat RandomScene(cv::Size size, const StereoGeometry& g, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  cv::Mat disparity(size, CV_32F, cv::Scalar(kInvalidDisparity));
+  for (int i = 0; i < 14; ++i) {
+    const double z = 0.3 + 9.0 * unit(rng);
+    const int w = 1 + int(unit(rng) * (i % 3 == 0 ? size.width : 60));
+    const int h = 1 + int(unit(rng) * (i % 3 == 1 ? size.height : 50));
+    const int x = int(unit(rng) * size.width) - w / 3, y = int(unit(rng) * size.height) - h / 3;
+    const cv::Rect r = cv::Rect(x, y, w, h) & cv::Rect(0, 0, size.width, size.height);
+    if (r.empty()) continue;
+    // A slanted surface: the disparity varies across it by up to 10 %.
+    const double d0 = g.DisparityFromDepth(z), slope = 0.1 * d0 * (unit(rng) - 0.5) / size.width;
+    for (int yy = r.y; yy < r.br().y; ++yy) {
+      for (int xx = r.x; xx < r.br().x; ++xx) {
+        disparity.at<float>(yy, xx) =
+            unit(rng) < 0.03 ? kInvalidDisparity : float(d0 + slope * (xx - r.x));
+      }
+    }
+  }
+  return disparity;
+}
+
+TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnAwkwardSizesAndRegions) {
+  const StereoGeometry g = testing::TestGeometry();
+  const cv::Size sizes[] = {{1, 1}, {7, 300}, {333, 5}, {257, 191}, {301, 203}};
+  std::uint64_t seed = 1;
+  for (const cv::Size size : sizes) {
+    const cv::Mat disparity = RandomScene(size, g, seed++);
+    const cv::Rect regions[] = {
+        cv::Rect(0, 0, size.width, size.height),
+        cv::Rect(size.width / 3, size.height / 4, std::max(1, size.width / 2),
+                 std::max(1, size.height / 2))};
+    for (const cv::Rect& region : regions) {
+      for (const double min_width_px : {0.0, 9.0}) {
+        ThinStructureOptions options;
+        options.min_width_px = min_width_px;
+        for (const bool seeds_only : {false, true}) {
+          const cv::Mat fast = BodyMask(disparity, g, region, options, seeds_only);
+          const cv::Mat naive = NaiveBodyMask(disparity, g, region, options, seeds_only);
+          ASSERT_EQ(fast.size(), naive.size());
+          EXPECT_EQ(cv::countNonZero(fast != naive), 0)
+              << size << " region " << region << " min_width_px " << min_width_px << " seeds_only "
+              << seeds_only << " (" << cv::countNonZero(naive) << " body pixels)";
+        }
+      }
+    }
+  }
 }
 
 // A 27 mm conductor at 2 m (10 px) is thin; a 10 cm block at 2 m (37 px) is a body, holes and all.
