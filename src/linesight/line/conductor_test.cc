@@ -9,18 +9,12 @@
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
+#include "linesight/line/line_test_util.h"
 #include "linesight/ranging/pipeline.h"
 #include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
 namespace {
-
-sim::PowerLineSequenceOptions FastSequence(std::uint64_t seed) {
-  sim::PowerLineSequenceOptions o;
-  o.seed = seed;
-  o.scene.sensor.supersampling = 1;
-  return o;
-}
 
 // Largest distance of the fitted axis from the true axis over arcs [from, to] (m), and the arc
 // error at the true point of arc `at`.
@@ -55,7 +49,7 @@ ConductorOptions Exact() {
 
 TEST(ConductorTest, FollowsTheTrueAxisOnExactDisparities) {
   for (std::uint64_t seed : {3u, 5u}) {
-    const sim::PowerLineSequence sequence(FastSequence(seed));
+    const sim::PowerLineSequence sequence(testing::FastSequence(seed));
     for (int index : {0, sequence.size() / 2}) {
       const sim::PowerLineScene scene = sequence.Render(index);
       const ConductorModel model = FitConductor(scene.disparity, TrueGeometry(scene), Exact());
@@ -72,7 +66,7 @@ TEST(ConductorTest, FollowsTheTrueAxisOnExactDisparities) {
 }
 
 TEST(ConductorTest, FollowsTheTrueAxisOnMatchedDisparities) {
-  const sim::PowerLineSequence sequence(FastSequence(7));
+  const sim::PowerLineSequence sequence(testing::FastSequence(7));
   const sim::PowerLineScene scene = sequence.Render(10);
   RangingPipelineOptions options;
   options.threads = 1;

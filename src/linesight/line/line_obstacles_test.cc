@@ -7,17 +7,11 @@
 #include <gtest/gtest.h>
 
 #include "linesight/core/error.h"
+#include "linesight/line/line_test_util.h"
 #include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
 namespace {
-
-sim::PowerLineSequenceOptions ObstacleSequence(std::uint64_t seed) {
-  sim::PowerLineSequenceOptions o;
-  o.seed = seed;
-  o.scene.sensor.supersampling = 1;
-  return o;
-}
 
 RangingPipelineOptions MatchOnOneThread() {
   RangingPipelineOptions o;
@@ -50,7 +44,7 @@ TEST(LineObstaclesTest, FindsTheNearestObstacleOnTheLineWithTypeAndDistances) {
   const bool print = std::getenv("LINE_STUDY") != nullptr;
   int checked = 0;
   for (std::uint64_t seed : {3u}) {
-    const sim::PowerLineSequence sequence(ObstacleSequence(seed));
+    const sim::PowerLineSequence sequence(testing::FastSequence(seed));
     for (int index = 140; index < sequence.size(); index += 20) {
       const sim::PowerLineScene scene = sequence.Render(index);
       const RangingPipeline pipeline(scene.calibration, MatchOnOneThread());
