@@ -7,6 +7,7 @@
 #include <benchmark/benchmark.h>
 
 #include "linesight/line/line_obstacles.h"
+#include "linesight/line/line_test_util.h"
 #include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
@@ -14,10 +15,7 @@ namespace {
 
 struct Frame {
   Frame() {
-    sim::PowerLineSequenceOptions o;
-    o.seed = 3;
-    o.scene.sensor.supersampling = 1;
-    const sim::PowerLineScene scene = sim::PowerLineSequence(o).Render(160);
+    const sim::PowerLineScene scene = sim::PowerLineSequence(testing::FastSequence(3)).Render(160);
     pipeline.emplace(scene.calibration, RangingPipelineOptions{});
     frame = pipeline->Process(scene.left, scene.right);
   }

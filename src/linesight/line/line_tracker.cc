@@ -60,14 +60,10 @@ void LineTracker::State::Fit(double now) {
     rss += r * r;
   }
   track.approach_mps = -slope;
-  const double at_now = ma - slope * mt;
-  fitted_arc = at_now;
-  track.arc_m = at_now;
+  fitted_arc = ma - slope * mt;  // the track's arc and time to reach follow from it in Update
   // The residual spread of the readings, at least the frames' own sigma, shrunk by their count.
   const double spread = n > 2 ? std::sqrt(rss / (n - 2)) : track.last.arc_sigma_m;
   track.arc_sigma_m = std::max(spread, track.last.arc_sigma_m) / std::sqrt(n);
-  track.time_to_reach_s =
-      track.approach_mps > 1e-3 ? std::max(0.0, at_now) / track.approach_mps : -1.0;
 }
 
 std::vector<LineTrack> LineTracker::Update(double timestamp_s,
@@ -121,7 +117,8 @@ std::vector<LineTrack> LineTracker::Update(double timestamp_s,
     s.track.last = o;
     s.Fit(timestamp_s);
   }
-  // Coasting tracks move on by their rate; stale ones and those behind the robot go.
+  // Every track's arc now (coasting ones move on by their rate) and its time to reach; stale ones
+  // and those behind the robot go.
   std::vector<State> kept;
   for (State& s : states_) {
     s.track.arc_m = s.Predict(timestamp_s);
