@@ -325,6 +325,51 @@ std::optional<ConductorCurve> FindOne(const std::vector<Candidate>& all,
   return curve;
 }
 
+// Share of the curve's 8 px stretches (over its tau extent) holding at least two of `members`.
+double Coverage(const ConductorCurve& k, const std::vector<Candidate>& all,
+                const std::vector<int>& members) {
+  constexpr double kBinPx = 8.0;
+  const int bins = static_cast<int>((k.tau_max - k.tau_min) / kBinPx) + 1;
+  std::vector<int> count(bins, 0);
+  for (int i : members) {
+    const CurveResidual r = Residual(k, all[i]);
+    const int b = static_cast<int>(std::floor((r.tau - k.tau_min) / kBinPx));
+    if (b >= 0 && b < bins) ++count[b];
+  }
+  return double(std::count_if(count.begin(), count.end(), [](int n) { return n >= 2; })) / bins;
+}
+
+// Joins pieces that one smooth curve explains: for each pair, the curve fitted to the union of
+// their pixels must support (within the tolerances, inside its extent) at least 90 % of the
+// union and of each piece. Two conductors side by side fail it (their lateral offset exceeds the
+// tolerance); the near and far parts of one conductor, or its two sides of an obstacle, pass.
+template <typename Piece>
+void MergeContinuations(const std::vector<Candidate>& all, const Tolerance& tol,
+                        std::vector<Piece>* pieces) {
+  const auto supported = [&](const ConductorCurve& k, const std::vector<int>& members) {
+    int n = 0;
+    for (int i : members) n += SupportsCurve(k, all[i], tol, 0.0);
+    return n;
+  };
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t a = 0; a < pieces->size() && !merged; ++a) {
+      for (size_t b = a + 1; b < pieces->size() && !merged; ++b) {
+        std::vector<int> both = (*pieces)[a].members;
+        both.insert(both.end(), (*pieces)[b].members.begin(), (*pieces)[b].members.end());
+        const ConductorCurve k = FitCurve(all, both, tol);
+        const std::vector<int>& ma = (*pieces)[a].members;
+        const std::vector<int>& mb = (*pieces)[b].members;
+        if (supported(k, ma) < 0.9 * ma.size() || supported(k, mb) < 0.9 * mb.size()) continue;
+        (*pieces)[a].curve = k;
+        (*pieces)[a].members = std::move(both);
+        pieces->erase(pieces->begin() + static_cast<long>(b));
+        merged = true;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void ConductorOptions::Check() const {
@@ -349,6 +394,8 @@ void ConductorOptions::Check() const {
   CheckOption(min_inliers >= 10, "ConductorOptions.min_inliers", min_inliers, "must be >= 10");
   CheckOption(min_image_length_px > 0, "ConductorOptions.min_image_length_px", min_image_length_px,
               "must be > 0");
+  CheckOption(min_coverage >= 0 && min_coverage <= 1, "ConductorOptions.min_coverage", min_coverage,
+              "must be in [0, 1]");
   CheckOption(max_conductors >= 1 && max_conductors <= 8, "ConductorOptions.max_conductors",
               max_conductors, "must be in [1, 8]");
 }
@@ -458,7 +505,10 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
   CheckDisparityMap(disparity, "disparity");
   ConductorModel model;
   const double d_far = geometry.DisparityFromDepth(options.max_depth_m);
-  const double d_near = geometry.DisparityFromDepth(options.min_depth_m);
+  double d_near = geometry.DisparityFromDepth(options.min_depth_m);
+  if (options.searched_max_disparity_px > 0) {
+    d_near = std::min(d_near, options.searched_max_disparity_px - 0.5);
+  }
   cv::Mat bodies = bodies_in;
   if (bodies.empty()) {
     ThinStructureOptions thin;
@@ -491,9 +541,15 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
   std::mt19937_64 rng(options.seed);
   std::vector<int> pool(all.size());
   for (size_t i = 0; i < all.size(); ++i) pool[i] = static_cast<int>(i);
-  std::vector<ConductorCurve> found;
-  bool end_on = false;
-  for (int c = 0; c < options.max_conductors; ++c) {
+  // Pieces of conductors. The RANSAC line of a piece is straight in (u, v, d); a conductor whose
+  // near part is many pixels wide and whose far part is a thin, converging line often comes out
+  // as two pieces (the near one holding most pixels), and so does a conductor an obstacle cuts.
+  struct Piece {
+    ConductorCurve curve;
+    std::vector<int> members;
+  };
+  std::vector<Piece> pieces;
+  for (int c = 0; c < 2 * options.max_conductors; ++c) {
     const ConductorCurve* seed =
         previous != nullptr && previous->ok() && c == 0 ? &previous->line : nullptr;
     std::optional<ConductorCurve> curve = FindOne(all, pool, tol, options, seed, &rng);
@@ -509,12 +565,20 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
       }
     }
     pool = std::move(rest);
+    pieces.push_back({*curve, std::move(members)});
+  }
+  MergeContinuations(all, tol, &pieces);
+  std::vector<ConductorCurve> found;
+  bool end_on = false;
+  for (Piece& piece : pieces) {
+    ConductorCurve* curve = &piece.curve;
     if (curve->tau_max - curve->tau_min < options.min_image_length_px) {
       end_on = end_on || found.empty();
       continue;
     }
-    curve->radius_m = EstimateRadius(*curve, all, members, options, geometry);
-    BuildPolyline(&*curve, geometry);
+    if (Coverage(*curve, all, piece.members) < options.min_coverage) continue;
+    curve->radius_m = EstimateRadius(*curve, all, piece.members, options, geometry);
+    BuildPolyline(curve, geometry);
     // The fringe of a conductor already found (edge pixels outside its tolerance) is not another.
     const bool same = std::any_of(found.begin(), found.end(), [&](const ConductorCurve& k) {
       return MedianSeparation(*curve, k) < 3.0 * options.max_radius_m;

@@ -54,7 +54,14 @@ struct ConductorOptions {
   int min_inliers = 80;             // fewer supporting pixels: no conductor
   double min_image_length_px = 40;  // shorter image extent: seen end-on, no usable line
   int max_conductors = 3;           // conductors looked for in one frame (the robot's + others)
-  std::uint64_t seed = 1;           // RANSAC sampling (deterministic)
+  // Share of a curve's image length (8 px stretches) that must hold supporting pixels: a conductor
+  // is seen continuously except where an obstacle hides it; a chance alignment of matching noise
+  // on the ground or in the sky is not.
+  double min_coverage = 0.5;
+  std::uint64_t seed = 1;  // RANSAC sampling (deterministic)
+  // The matcher's largest searched disparity (px; 0 = unknown): a pixel at it is censored (the
+  // surface is nearer than the search reaches), not a measurement, and is left out.
+  double searched_max_disparity_px = 0;
 
   void Check() const;
 };
