@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+
+#include <opencv2/calib3d.hpp>
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/ranging/thin_structures.h"
+#include "linesight/stereo/matcher.h"
 
 namespace linesight {
 
@@ -26,6 +30,26 @@ constexpr double kHiddenLinePx = 40.0;
 const cv::Mat& LineDisparity(const RangingPipeline& pipeline, const RangingFrame& frame,
                              const LineObstacleOptions& options) {
   return options.dense_disparity ? frame.disparity : pipeline.RangingDisparity(frame);
+}
+
+// The map with its speckles invalid (cv::filterSpeckles on the 1/16 px fixed-point map).
+cv::Mat Despeckle(const cv::Mat& disparity, const LineObstacleOptions& o) {
+  if (o.speckle_window_px == 0) return disparity;
+  constexpr std::int16_t kInvalid = std::numeric_limits<std::int16_t>::min();
+  cv::Mat fixed(disparity.size(), CV_16SC1);
+  for (int y = 0; y < disparity.rows; ++y) {
+    const float* d = disparity.ptr<float>(y);
+    std::int16_t* f = fixed.ptr<std::int16_t>(y);
+    for (int x = 0; x < disparity.cols; ++x) {
+      f[x] = IsValidDisparity(d[x]) ? cv::saturate_cast<std::int16_t>(std::lround(d[x] * 16.0f))
+                                    : kInvalid;
+    }
+  }
+  cv::filterSpeckles(fixed, kInvalid, o.speckle_window_px,
+                     static_cast<double>(std::lround(o.speckle_range_px * 16.0)));
+  cv::Mat out = disparity.clone();
+  out.setTo(std::numeric_limits<float>::infinity(), fixed == kInvalid);
+  return out;
 }
 
 // q-quantile (0..1) of values (copied).
@@ -196,6 +220,13 @@ std::string LineObstacleTypeName(LineObstacleType type) {
   return "unknown";
 }
 
+std::map<std::string, std::string> LineMatcherParams(const std::string& method,
+                                                     std::map<std::string, std::string> params) {
+  const std::string name = method.empty() ? DefaultMatcherName() : method;
+  if (name == "sgm" || name == "isgm") params.emplace("speckle_window", "0");
+  return params;
+}
+
 void LineObstacleOptions::Check() const {
   conductor.Check();
   CheckOption(corridor_side_m > 0 && corridor_side_m <= 2, "LineObstacleOptions.corridor_side_m",
@@ -212,6 +243,10 @@ void LineObstacleOptions::Check() const {
   CheckOption(attach_disparity_relative >= 0 && attach_disparity_relative < 0.5,
               "LineObstacleOptions.attach_disparity_relative", attach_disparity_relative,
               "must be in [0, 0.5)");
+  CheckOption(speckle_window_px >= 0, "LineObstacleOptions.speckle_window_px", speckle_window_px,
+              "must be >= 0");
+  CheckOption(speckle_range_px >= 0 && speckle_range_px <= 100,
+              "LineObstacleOptions.speckle_range_px", speckle_range_px, "must be in [0, 100] px");
   CheckOption(min_pixels >= 1, "LineObstacleOptions.min_pixels", min_pixels, "must be >= 1");
   CheckOption(min_attached_pixels >= 1, "LineObstacleOptions.min_attached_pixels",
               min_attached_pixels, "must be >= 1");
@@ -263,17 +298,20 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   const cv::Mat bodies =
       BodyMask(disparity, g, cv::Rect(0, 0, disparity.cols, disparity.rows), thin);
   LineObstacles result;
-  result.conductor = FitConductor(disparity, g, options.conductor, bodies, previous);
+  ConductorOptions conductor = options.conductor;
+  conductor.searched_max_disparity_px = pipeline.search_range().max_disparity();
+  result.conductor = FitConductor(disparity, g, conductor, bodies, previous);
   if (!result.conductor.ok()) return result;
+  const cv::Mat despeckled = Despeckle(disparity, options);
   std::vector<LinePoint> points =
-      CorridorPoints(disparity, bodies, g, result.conductor, options, &result.body_pixels);
+      CorridorPoints(despeckled, bodies, g, result.conductor, options, &result.body_pixels);
   result.corridor_pixels = static_cast<int>(points.size());
   cv::Mat masked(disparity.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   for (const std::vector<LinePoint>& run :
        SplitAlongLine(std::move(points), options.cluster_gap_m)) {
     LineObstacle o;
     if (!Describe(run, result.conductor, g, options, &o)) continue;
-    Range(pipeline, frame, disparity, result.conductor, &masked, &o);
+    Range(pipeline, frame, despeckled, result.conductor, &masked, &o);
     result.obstacles.push_back(std::move(o));
   }
   std::sort(result.obstacles.begin(), result.obstacles.end(),

@@ -18,6 +18,7 @@
 // and "unknown" when too little of it is seen to tell.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,13 @@ struct LineObstacleOptions {
   // margin (px) at a disparity within this share (plus 1 px) of the conductor's there.
   double attach_margin_px = 2.0;
   double attach_disparity_relative = 0.05;
+  // The conductor is fitted on the map as matched (a receding conductor is a chain of small
+  // pieces a speckle filter deletes); obstacles and their distances are taken on a copy without
+  // speckles: pieces of at most this many pixels whose 4-neighbours differ by at most
+  // speckle_range_px (the usual 100 px / 2 px). Stray matches in front of an obstacle otherwise
+  // pull its nearest surface towards the camera. 0 = no filter.
+  int speckle_window_px = 100;
+  double speckle_range_px = 2.0;
   int min_pixels = 25;          // fewer body pixels: not an obstacle (too small or too far)
   int min_attached_pixels = 4;  // fewer touching pixels: not on this line
   // Type thresholds (m, after removing the fattening): see the file comment.
@@ -92,6 +100,14 @@ struct LineObstacles {
 
   nlohmann::json ToJson() const;
 };
+
+// The matcher settings the line stages need, on top of the ranging chain's: for sgm and isgm the
+// speckle filter off unless `params` sets "speckle_window". A conductor recedes in depth along its
+// image, so its disparity changes by a pixel or more from row to row; the speckle filter splits
+// it into small blobs of similar disparity and removes them, leaving only the near, wide part of
+// the line (on the synthetic line, the conductor beyond ~0.6 m in most frames).
+std::map<std::string, std::string> LineMatcherParams(const std::string& method,
+                                                     std::map<std::string, std::string> params);
 
 // One frame: the conductor model (seeded by `previous` if given) and the obstacles on it.
 LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFrame& frame,

@@ -13,9 +13,11 @@
 namespace linesight {
 namespace {
 
+// The chain the line stages run on (LineMatcherParams), on one thread.
 RangingPipelineOptions MatchOnOneThread() {
   RangingPipelineOptions o;
   o.threads = 1;
+  o.params = LineMatcherParams(o.method, o.params);
   return o;
 }
 
