@@ -74,9 +74,17 @@ void AddSourceOptions(CLI::App& app, std::string* spec, FrameSourceOptions* opti
   app.add_option("--height", options->height, "camera frame height (px; 0 = device default)");
   app.add_option("--fps", options->fps, "camera frame rate (0 = device default)");
   app.add_flag("--loop", options->loop, "start image sequences and videos again at their end");
-  app.add_option(
-      "--synthetic-obstacles", options->synthetic_obstacles,
-      "synthetic source: type:distance_m,... (default damper:1.5,clamp:3,insulator:4.5)");
+  app.add_option("--synthetic-speed", options->synthetic_speed_mps,
+                 "synthetic source: the robot's speed toward the obstacles on its line (m/s; 0 = "
+                 "the still scene)")
+      ->capture_default_str();
+  app.add_option("--synthetic-start", options->synthetic_start_m,
+                 "synthetic source: distance along the line to the first obstacle at the first "
+                 "frame (m)")
+      ->capture_default_str();
+  app.add_option("--synthetic-obstacles", options->synthetic_obstacles,
+                 "synthetic source: the still scene with these obstacles, type:distance_m,... "
+                 "(e.g. damper:1.5,clamp:3,insulator:4.5)");
   app.add_option("--synthetic-supersampling", options->synthetic_supersampling,
                  "synthetic source: rays per pixel side (1 = fastest)")
       ->capture_default_str();

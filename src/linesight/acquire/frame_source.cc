@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <future>
 #include <utility>
 
 #include <fmt/format.h>
@@ -13,6 +14,7 @@
 #include "linesight/core/error.h"
 #include "linesight/io/image_io.h"
 #include "linesight/sim/power_line_scene.h"
+#include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
 namespace {
@@ -308,6 +310,63 @@ class SyntheticSource final : public FrameSource {
   Clock::time_point start_ = Clock::now();
 };
 
+// The moving synthetic sequence: the robot rides toward the obstacles on its line. Frame k carries
+// the sequence's timestamp k / fps (robot time, so approach rates are true however fast the
+// frames are processed); the next frame renders in the background while the caller works on this
+// one. With `loop` the sequence starts again at its end, the timestamps running on.
+class SyntheticSequenceSource final : public FrameSource {
+ public:
+  SyntheticSequenceSource(uint64_t seed, const FrameSourceOptions& options)
+      : seed_(seed),
+        loop_(options.loop),
+        sequence_(MakeOptions(seed, options)),
+        calibration_(sim::MakeStereoCalibration(sequence_.options().scene.rig)) {
+    Prefetch(0);
+  }
+  ~SyntheticSequenceSource() override {
+    if (next_.valid()) next_.wait();
+  }
+
+  std::optional<StereoFrame> Read() override {
+    if (!next_.valid()) return std::nullopt;
+    sim::PowerLineScene scene = next_.get();
+    const int64_t index = served_++;
+    const int64_t following = served_;
+    if (loop_ || following < sequence_.size()) Prefetch(following);
+    return StereoFrame{std::move(scene.left), std::move(scene.right), index,
+                       static_cast<double>(index) / sequence_.options().fps};
+  }
+  std::string Describe() const override {
+    return fmt::format(
+        "synthetic power-line sequence (seed {}, {} frames at {} Hz, {} m/s toward {} obstacles{})",
+        seed_, sequence_.size(), sequence_.options().fps, sequence_.options().speed_mps,
+        sequence_.layout().size(), loop_ ? ", looping" : "");
+  }
+  std::optional<StereoCalibration> Calibration() const override { return calibration_; }
+
+ private:
+  static sim::PowerLineSequenceOptions MakeOptions(uint64_t seed, const FrameSourceOptions& o) {
+    sim::PowerLineSequenceOptions sequence;
+    sequence.seed = seed;
+    sequence.speed_mps = o.synthetic_speed_mps;
+    sequence.start_gap_m = o.synthetic_start_m;
+    sequence.scene.sensor.supersampling = o.synthetic_supersampling;
+    sequence.Check();
+    return sequence;
+  }
+  void Prefetch(int64_t index) {
+    const int frame = static_cast<int>(index % sequence_.size());
+    next_ = std::async(std::launch::async, [this, frame] { return sequence_.Render(frame); });
+  }
+
+  uint64_t seed_;
+  bool loop_;
+  sim::PowerLineSequence sequence_;
+  StereoCalibration calibration_;  // the sequence's true calibration
+  std::future<sim::PowerLineScene> next_;
+  int64_t served_ = 0;
+};
+
 bool IsVideoFile(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -327,6 +386,9 @@ void FrameSourceOptions::Check() const {
   CheckOption(synthetic_supersampling >= 1 && synthetic_supersampling <= 8,
               "FrameSourceOptions.synthetic_supersampling", synthetic_supersampling,
               "must be in 1..8");
+  CheckOption(synthetic_speed_mps == 0 || (synthetic_speed_mps >= 0.02 && synthetic_speed_mps <= 3),
+              "FrameSourceOptions.synthetic_speed_mps", synthetic_speed_mps,
+              "must be 0 (the still scene) or in [0.02, 3] m/s");
 }
 
 std::vector<std::string> FrameSourceSchemes() {
@@ -353,6 +415,9 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& spec,
         throw UsageError(
             fmt::format("source '{}': the seed '{}' must be a non-negative integer", spec, body));
       }
+    }
+    if (options.synthetic_obstacles.empty() && options.synthetic_speed_mps > 0) {
+      return std::make_unique<SyntheticSequenceSource>(seed, options);
     }
     return std::make_unique<SyntheticSource>(seed, options);
   }

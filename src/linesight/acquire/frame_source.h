@@ -2,8 +2,11 @@
 // side-by-side or two-file video, V4L2 cameras and the synthetic power-line scene, chosen by a
 // source string (the `--source` of `linesight serve` and `linesight acquire`):
 //
-//   synthetic[:SEED]            the embedded power-line scene (sim/), captured again with fresh
-//                               sensor noise for every frame; its true calibration comes with it
+//   synthetic[:SEED]            the embedded power-line scene (sim/) with its true calibration:
+//                               the robot riding its line toward the obstacles of the seed
+//                               (sim/power_line_sequence.h, timestamps in robot time); with
+//                               synthetic_obstacles or speed 0 the still scene, captured again with
+//                               fresh sensor noise for every frame
 //   pair:LEFT,RIGHT             one image pair, delivered again for every frame
 //   images:LEFT_GLOB,RIGHT_GLOB image sequences, paired in sorted order (equal counts)
 //   video:LEFT,RIGHT            two video files (or GStreamer / URL strings OpenCV opens)
@@ -41,12 +44,17 @@ struct FrameSourceOptions {
   int width = 0;
   int height = 0;
   double fps = 0;
-  // Sequences and videos start again from the first frame at their end instead of ending.
+  // Sequences, videos and the synthetic sequence start again from the first frame at their end
+  // instead of ending.
   bool loop = false;
-  // Synthetic scene: obstacles ("damper:1.5,clamp:3,insulator:4.5" like `linesight render`;
-  // empty = the scene's defaults) and supersampling (1 = fastest).
+  // Synthetic source: the robot's speed along the line (m/s; 0 = the still scene), the still
+  // scene's obstacles ("damper:1.5,clamp:3,insulator:4.5" like `linesight render`; empty = the
+  // moving sequence, or the still scene's defaults at speed 0) and supersampling (1 = fastest:
+  // about 0.3 s per 752x480 frame on 2 cores, rendered while the previous frame is processed).
+  double synthetic_speed_mps = 0.3;
+  double synthetic_start_m = 6.0;  // moving sequence: arc to the first obstacle at the first frame
   std::string synthetic_obstacles;
-  int synthetic_supersampling = 2;
+  int synthetic_supersampling = 1;
 
   void Check() const;
 };
