@@ -21,6 +21,7 @@ int RunEvalSweep(int argc, char** argv);      // `linesight eval sweep`, dispatc
 int RunEvalReport(int argc, char** argv);     // `linesight eval report`, dispatched by eval.cc
 int RunEvalObstacles(int argc, char** argv);  // `linesight eval obstacles`, dispatched by eval.cc
 int RunEvalPlates(int argc, char** argv);     // `linesight eval plates`, dispatched by eval.cc
+int RunEvalSequences(int argc, char** argv);  // `linesight eval sequences`, dispatched by eval.cc
 int RunServe(int argc, char** argv);
 int RunAcquire(int argc, char** argv);
 

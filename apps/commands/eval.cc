@@ -125,6 +125,8 @@ constexpr Study kStudies[] = {
     {"obstacles", RunEvalObstacles, "matchers on rendered damper / clamp / insulator crops"},
     {"plates", RunEvalPlates,
      "ranging on an independent renderer's plates / boxes (photograph textures)"},
+    {"sequences", RunEvalSequences,
+     "obstacle awareness on moving power-line sequences (detection, type, distance, tracks)"},
     {"report", RunEvalReport, "run every study and write docs/results/README.md"},
 };
 

@@ -49,19 +49,6 @@ void RangingStudyOptions::Check() const {
   pipeline.Check();
 }
 
-namespace {
-
-RangingStudyCell SummariseRangingCell(const std::string& calibration, const std::string& type,
-                                      double truth, const std::vector<RangeResult>& results,
-                                      const std::vector<double>& truths) {
-  RangingStudyCell s;
-  static_cast<RangeRunStats&>(s) = SummariseRangeRuns(results, truths);
-  s.calibration = calibration;
-  s.type = type;
-  s.truth_m = truth;
-  return s;
-}
-
 // Calibration estimated from rendered chessboards with the calibrator of `linesight calibrate`
 // (method zhang), as `linesight demo` does.
 StereoCalibration EstimateStudyCalibration(const sim::StereoRigOptions& rig, int views,
@@ -81,6 +68,19 @@ StereoCalibration EstimateStudyCalibration(const sim::StereoRigOptions& rig, int
   info->rectified_focal_px = c.RectifiedFocal();
   info->true_rectified_focal_px = estimate.boards.calibration.RectifiedFocal();
   return c;
+}
+
+namespace {
+
+RangingStudyCell SummariseRangingCell(const std::string& calibration, const std::string& type,
+                                      double truth, const std::vector<RangeResult>& results,
+                                      const std::vector<double>& truths) {
+  RangingStudyCell s;
+  static_cast<RangeRunStats&>(s) = SummariseRangeRuns(results, truths);
+  s.calibration = calibration;
+  s.type = type;
+  s.truth_m = truth;
+  return s;
 }
 
 // The calibration's share of a cell's error, apart from matching: the obstacle's nearest point

@@ -78,6 +78,11 @@ struct StudyEstimatedCalibration {
   double rectified_focal_px = 0.0, true_rectified_focal_px = 0.0;
 };
 
+// Zhang on `views` rendered board views of `rig` (sim::CalibrateFromRenderedBoards), rectified;
+// fills `info`. Throws InputError when too few views are detected.
+StereoCalibration EstimateStudyCalibration(const sim::StereoRigOptions& rig, int views,
+                                           std::uint64_t seed, StudyEstimatedCalibration* info);
+
 // Depth Z = baseline * f / (d + doffs) from the chain's matcher against Z from the ground truth on
 // the non-occluded pixels of a Middlebury 2014 scene.
 struct MiddleburyDepthCheck {
