@@ -31,13 +31,16 @@ extern "C" void StopOnSignal(int) {
 
 int RunServe(int argc, char** argv) {
   CLI::App app{
-      "Base station: range a live stereo stream (camera, video, images or the synthetic scene) and "
-      "serve a web page and JSON API with every obstacle's filtered distance +- sigma.",
+      "Base station: find the obstacles on the robot's line in a live stereo stream (camera, "
+      "video, images or the moving synthetic sequence), range them and any ROI, and serve a web "
+      "page and JSON API with each obstacle's type, distance along the line and straight +- "
+      "sigma, approach rate, time to reach and the alarm.",
       "serve"};
   std::string source_spec, calib_path, host = "127.0.0.1";
   std::vector<std::string> roi_texts, raw_params;
   int port = 8080;
   bool no_auto = false;
+  std::string finder = "line";
   FrameSourceOptions source_options;
   BaseStationOptions options;
   AddSourceOptions(app, &source_spec, &source_options);
@@ -48,6 +51,13 @@ int RunServe(int argc, char** argv) {
   app.add_option("--port", port, "TCP port (0 = any free port)")->capture_default_str();
   app.add_option("--roi", roi_texts, "region x,y,w,h in rectified left pixels (repeatable)");
   app.add_flag("--no-auto", no_auto, "do not find obstacles automatically (only the ROIs)");
+  app.add_option("--finder", finder,
+                 "automatic finding: line (the obstacles on the robot's conductor, typed, along "
+                 "the line) or regions (every region thicker than a conductor, for any rig)")
+      ->capture_default_str();
+  app.add_option("--alarm-distance", options.alarm_distance_m,
+                 "alarm when an obstacle on the line is nearer than this along the line (m)")
+      ->capture_default_str();
   app.add_flag("--rectified", options.pipeline.input_rectified,
                "the frames are already rectified (P1 P2 Q as given)");
   app.add_option("--method", options.pipeline.method,
@@ -70,6 +80,7 @@ int RunServe(int argc, char** argv) {
   return RunCommand(app, argc, argv, [&] {
     for (const std::string& text : roi_texts) options.rois.push_back(ParseRoi(text));
     options.auto_detect = !no_auto;
+    options.finder = ParseAutoFinder(finder);
     options.pipeline.params = ParseParams(raw_params);
     if (options.rois.empty() && !options.auto_detect) {
       throw UsageError("--no-auto needs at least one --roi x,y,w,h");

@@ -11,14 +11,40 @@
 
 namespace linesight {
 
-RoiRequest ParseRoiRequest(const std::string& body, cv::Size image) {
+namespace {
+
+nlohmann::json ParseObject(const std::string& body, const char* expected) {
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(body);
   } catch (const nlohmann::json::exception&) {
     throw InputError("the request body is not valid JSON");
   }
-  if (!j.is_object()) throw InputError("expected a JSON object {\"rois\": [...], \"auto\": bool}");
+  if (!j.is_object()) throw InputError(fmt::format("expected a JSON object {}", expected));
+  return j;
+}
+
+}  // namespace
+
+double ParseAlarmRequest(const std::string& body) {
+  const nlohmann::json j = ParseObject(body, "{\"distance_m\": number}");
+  for (const auto& [key, value] : j.items()) {
+    if (key != "distance_m") {
+      throw InputError(fmt::format("unknown field '{}' (expected 'distance_m')", key));
+    }
+  }
+  if (!j.contains("distance_m") || !j["distance_m"].is_number()) {
+    throw InputError("'distance_m' must be a number (m along the line)");
+  }
+  const double d = j["distance_m"].get<double>();
+  if (!(d >= 0.05 && d <= 100)) {
+    throw InputError(fmt::format("'distance_m' = {} must be in [0.05, 100] m", d));
+  }
+  return d;
+}
+
+RoiRequest ParseRoiRequest(const std::string& body, cv::Size image) {
+  nlohmann::json j = ParseObject(body, "{\"rois\": [...], \"auto\": bool}");
   RoiRequest request;
   for (const auto& [key, value] : j.items()) {
     if (key != "rois" && key != "auto") {

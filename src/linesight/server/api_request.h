@@ -19,4 +19,7 @@ struct RoiRequest {
 };
 RoiRequest ParseRoiRequest(const std::string& body, cv::Size image);
 
+// What POST /api/alarm carries: {"distance_m": x} with 0.05 <= x <= 100. InputError otherwise.
+double ParseAlarmRequest(const std::string& body);
+
 }  // namespace linesight

@@ -1,4 +1,4 @@
-// libFuzzer target for the base station's API request parser (build with -DLINESIGHT_FUZZ=ON and
+// libFuzzer target for the base station's API request parsers (build with -DLINESIGHT_FUZZ=ON and
 // clang, see CMakeLists.txt). Every input must parse or throw InputError; anything else (a crash,
 // a sanitizer report, another exception, an ROI outside the image) is a finding.
 #include <cstddef>
@@ -19,6 +19,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (roi.area() <= 0 || (roi & image) != roi) std::abort();
       }
     }
+  } catch (const linesight::InputError&) {
+  }
+  try {
+    const double d = linesight::ParseAlarmRequest(body);
+    if (!(d >= 0.05 && d <= 100)) std::abort();
   } catch (const linesight::InputError&) {
   }
   return 0;

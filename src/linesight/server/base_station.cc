@@ -30,9 +30,23 @@ nlohmann::json RectToJson(const cv::Rect& r) { return {r.x, r.y, r.width, r.heig
 
 }  // namespace
 
+std::string AutoFinderName(AutoFinder finder) {
+  return finder == AutoFinder::kLine ? "line" : "regions";
+}
+
+AutoFinder ParseAutoFinder(const std::string& name) {
+  if (name == "line") return AutoFinder::kLine;
+  if (name == "regions") return AutoFinder::kRegions;
+  throw UsageError(fmt::format("automatic finder '{}': expected line or regions", name));
+}
+
 void BaseStationOptions::Check() const {
   pipeline.Check();
   tracker.Check();
+  line.Check();
+  line_tracker.Check();
+  CheckOption(alarm_distance_m >= 0.05 && alarm_distance_m <= 100,
+              "BaseStationOptions.alarm_distance_m", alarm_distance_m, "must be in [0.05, 100] m");
   CheckOption(jpeg_quality >= 1 && jpeg_quality <= 100, "BaseStationOptions.jpeg_quality",
               jpeg_quality, "must be in 1..100");
   CheckOption(max_auto_relative_sigma > 0, "BaseStationOptions.max_auto_relative_sigma",
@@ -49,7 +63,9 @@ BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
       options_(options),
       rois_(options.rois),
       auto_detect_(options.auto_detect),
-      tracker_(options.tracker) {
+      tracker_(options.tracker),
+      line_tracker_(options.line_tracker),
+      alarm_distance_m_(options.alarm_distance_m) {
   options_.Check();
   if (!calibration) calibration = source_->Calibration();
   if (!calibration) {
@@ -64,7 +80,11 @@ BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
   image_size_ = first_frame_->left.size();
   CheckCalibrationMatchesImage(*calibration, image_size_, "the calibration");
   for (const cv::Rect& roi : rois_) CheckRoi(roi, image_size_);
-  pipeline_ = std::make_unique<RangingPipeline>(*calibration, options_.pipeline);
+  RangingPipelineOptions pipeline_options = options_.pipeline;
+  if (options_.finder == AutoFinder::kLine) {
+    pipeline_options.params = LineMatcherParams(pipeline_options.method, pipeline_options.params);
+  }
+  pipeline_ = std::make_unique<RangingPipeline>(*calibration, pipeline_options);
   calibration_summary_ =
       fmt::format("{}x{}, rectified f {:.1f} px, baseline {:.1f} mm", image_size_.width,
                   image_size_.height, pipeline_->rectified_calibration().RectifiedFocal(),
@@ -137,16 +157,24 @@ bool BaseStation::Step() {
     automatic = auto_detect_;
     if (settings_changed_) {
       tracker_.Reset();
+      line_tracker_ = LineTracker(options_.line_tracker);
       settings_changed_ = false;
     }
   }
+  const bool line_mode = automatic && options_.finder == AutoFinder::kLine;
 
   Stopwatch watch;
   const RangingFrame ranged = pipeline_->Process(frame->left, frame->right);
   std::vector<RangeResult> results = pipeline_->RangeRois(ranged, rois);
   const size_t num_roi = results.size();
-  if (automatic) {
+  if (automatic && !line_mode) {
     for (RangeResult& r : pipeline_->RangeAuto(ranged)) results.push_back(std::move(r));
+  }
+  LineObstacles on_line;
+  if (line_mode) {
+    on_line = FindLineObstacles(*pipeline_, ranged, options_.line,
+                                conductor_.ok() ? &conductor_ : nullptr);
+    conductor_ = on_line.conductor;
   }
   const double process_ms = watch.ElapsedMs();
 
@@ -202,6 +230,24 @@ bool BaseStation::Step() {
   snapshot_.fps = fps_;
   snapshot_.left_jpeg = std::move(left_jpeg);
   snapshot_.disparity_jpeg = std::move(disparity_jpeg);
+  nlohmann::json line_json;
+  if (line_mode) {
+    // The line tracker runs under the lock: a settings change resets it from another thread.
+    const std::vector<LineTrack> line_tracks =
+        line_tracker_.Update(frame->timestamp_s, on_line.obstacles);
+    nlohmann::json list = nlohmann::json::array();
+    for (const LineTrack& t : line_tracks) list.push_back(t.ToJson());
+    nlohmann::json found = on_line.ToJson();
+    const bool alarm = !line_tracks.empty() && line_tracks.front().arc_m <= alarm_distance_m_;
+    line_json = {{"conductor", found["conductor"]},
+                 {"obstacles", found["obstacles"]},
+                 {"tracks", list},
+                 {"alarm_distance_m", alarm_distance_m_},
+                 {"alarm", alarm},
+                 {"distance_definition",
+                  "arc_m: distance along the conductor from the robot to the obstacle's near end "
+                  "(m); distance_m: depth of its nearest visible surface (m)"}};
+  }
   snapshot_.result = {{"frame", frame->index},
                       {"timestamp_s", frame->timestamp_s},
                       {"process_ms", process_ms},
@@ -211,6 +257,7 @@ bool BaseStation::Step() {
                       {"distance_definition",
                        "depth of the obstacle's nearest visible surface along the rectified left "
                        "optical axis (m)"}};
+  if (line_mode) snapshot_.result["line"] = std::move(line_json);
   published_.notify_all();
   return true;
 }
@@ -248,7 +295,16 @@ nlohmann::json BaseStation::Status() const {
           {"paused", paused_},
           {"error", error_},
           {"rois", rois},
-          {"auto", auto_detect_}};
+          {"auto", auto_detect_},
+          {"finder", AutoFinderName(options_.finder)},
+          {"alarm_distance_m", alarm_distance_m_}};
+}
+
+void BaseStation::SetAlarmDistance(double distance_m) {
+  CheckOption(distance_m >= 0.05 && distance_m <= 100, "alarm distance", distance_m,
+              "must be in [0.05, 100] m");
+  std::lock_guard lock(mutex_);
+  alarm_distance_m_ = distance_m;
 }
 
 void BaseStation::SetRois(const RoiRequest& request) {
@@ -345,6 +401,15 @@ BaseStationServer::BaseStationServer(BaseStation* station) : impl_(std::make_uni
   http.Post("/api/rois", [station](const httplib::Request& req, httplib::Response& res) {
     try {
       station->SetRois(ParseRoiRequest(req.body, station->image_size()));
+    } catch (const InputError& e) {
+      SendError(res, 400, e.what());
+      return;
+    }
+    SendJson(res, station->Status());
+  });
+  http.Post("/api/alarm", [station](const httplib::Request& req, httplib::Response& res) {
+    try {
+      station->SetAlarmDistance(ParseAlarmRequest(req.body));
     } catch (const InputError& e) {
       SendError(res, 400, e.what());
       return;

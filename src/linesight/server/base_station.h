@@ -1,16 +1,24 @@
 // The base station: a live ranging loop over a FrameSource and the HTTP server that shows it
-// (`linesight serve`). The loop grabs a pair, rectifies, matches, ranges the user's ROIs and/or the
-// automatically found obstacles, filters every obstacle's distance over time (DistanceTracker) and
+// (`linesight serve`). The loop grabs a pair, rectifies, matches, ranges the user's ROIs (filtered
+// over time by DistanceTracker) and finds obstacles automatically - by default the obstacles on the
+// robot's conductor (FindLineObstacles: the conductor model, each obstacle's type and distance
+// along the line, tracked by LineTracker with approach rate and time to reach; an alarm when the
+// nearest is within the alarm distance along the line), or for rigs that do not ride a line every
+// region thicker than a conductor at its own depth (RangeAuto, filtered by DistanceTracker) - and
 // publishes the newest result; the server hands it to the web page (web/index.html, embedded) and
 // to any client through a JSON API:
 //
 //   GET  /                    the base-station page
 //   GET  /api/status          source, calibration summary, frame index, fps, latency, settings
 //   GET  /api/result          newest frame's obstacles: per-frame measurements and the filtered
-//                             tracks (confirmed ones seen in this frame, and every ROI track)
+//                             tracks (confirmed ones seen in this frame, and every ROI track);
+//                             in line mode "line": the conductor (status, image curve), this
+//                             frame's obstacles, the tracks nearest along the line first, the
+//                             alarm distance and whether the nearest track is within it
 //   GET  /api/frame/left.jpg  newest rectified left image (JPEG)
 //   GET  /api/frame/disparity.jpg  its disparity, colour-mapped (JPEG)
 //   POST /api/rois            {"rois": [[x, y, w, h], ...], "auto": true|false}: set what is ranged
+//   POST /api/alarm           {"distance_m": x}: the alarm distance along the line (m)
 //   POST /api/pause, /api/resume
 //
 // Every API error answers 4xx with {"error": "<what is wrong>"}. The HTTP layer only parses and
@@ -31,17 +39,32 @@
 #include <opencv2/core.hpp>
 
 #include "linesight/acquire/frame_source.h"
+#include "linesight/line/line_obstacles.h"
+#include "linesight/line/line_tracker.h"
 #include "linesight/ranging/pipeline.h"
 #include "linesight/server/api_request.h"
 #include "linesight/server/distance_tracker.h"
 
 namespace linesight {
 
+// How obstacles are found automatically.
+enum class AutoFinder {
+  kLine,     // the obstacles on the robot's conductor (line/line_obstacles.h)
+  kRegions,  // every region thicker than a conductor at its own depth (RangingPipeline::RangeAuto)
+};
+std::string AutoFinderName(AutoFinder finder);        // "line", "regions"
+AutoFinder ParseAutoFinder(const std::string& name);  // UsageError listing the names
+
 struct BaseStationOptions {
   RangingPipelineOptions pipeline;
   DistanceTrackerOptions tracker;
   std::vector<cv::Rect> rois;  // user ROIs (rectified left pixels)
   bool auto_detect = true;     // also find obstacles automatically
+  AutoFinder finder = AutoFinder::kLine;
+  LineObstacleOptions line;
+  LineTrackerOptions line_tracker;
+  // An obstacle on the line nearer than this along the line raises the alarm (m, 0.05..100).
+  double alarm_distance_m = 1.0;
   // Automatic detections whose sigma_m exceeds this share of their distance are reported but not
   // tracked: fragments of background structure whose depth the ranging cannot pin down (> 0).
   double max_auto_relative_sigma = 0.05;
@@ -86,6 +109,7 @@ class BaseStation {
   BaseStationSnapshot Snapshot() const;
   nlohmann::json Status() const;
   void SetRois(const RoiRequest& request);
+  void SetAlarmDistance(double distance_m);  // OptionError outside 0.05..100 m
   void SetPaused(bool paused);
   bool running() const { return running_.load(); }
   // The error that ended the loop (a camera that stopped), empty otherwise.
@@ -111,6 +135,9 @@ class BaseStation {
   bool paused_ = false;
   std::string error_;
   DistanceTracker tracker_;
+  LineTracker line_tracker_;
+  ConductorModel conductor_;  // the last frame's, seeds the next fit
+  double alarm_distance_m_ = 1.0;
   double fps_ = 0;
   double last_publish_s_ = -1;
 

@@ -10,11 +10,26 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
 namespace {
 
 const cv::Size kImage(752, 480);
+
+TEST(ParseAlarmRequest, AcceptsADistanceAndNamesWhatIsWrong) {
+  EXPECT_DOUBLE_EQ(ParseAlarmRequest(R"({"distance_m": 1.5})"), 1.5);
+  for (const char* body : {"", "[]", "{}", R"({"distance_m": "1"})", R"({"distance_m": 0})",
+                           R"({"distance_m": 1e9})", R"({"distance_m": 1, "x": 2})"}) {
+    EXPECT_THROW(ParseAlarmRequest(body), InputError) << body;
+  }
+  try {
+    ParseAlarmRequest(R"({"distance_m": 0.01})");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("[0.05, 100]"), std::string::npos) << e.what();
+  }
+}
 
 TEST(ParseRoiRequest, AcceptsRoisAndAuto) {
   const RoiRequest r =
@@ -91,6 +106,11 @@ TEST(ParseRoiRequest, MutantsParseOrThrowInputError) {
     } catch (const InputError&) {
       ++rejected;
     }
+    try {
+      const double d = ParseAlarmRequest(body);
+      EXPECT_TRUE(d >= 0.05 && d <= 100) << body;
+    } catch (const InputError&) {
+    }
   }
   EXPECT_GT(parsed, 50);
   EXPECT_GT(rejected, 1000);
@@ -126,6 +146,7 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   options.pipeline.min_depth_m = 1.0;  // fewer disparities: a faster test
   options.pipeline.max_depth_m = 6.0;
   options.max_frames = 3;
+  options.finder = AutoFinder::kRegions;
   BaseStation station(OpenFrameSource("synthetic:1", source_options), std::nullopt, options);
   BaseStationServer server(&station);
   const int port = server.Bind("127.0.0.1", 0);
@@ -207,6 +228,72 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   EXPECT_EQ(missing->status, 404);
   EXPECT_NE(missing->body.find("no such resource"), std::string::npos);
 
+  server.Stop();
+  http.join();
+}
+
+// The base station on the moving synthetic sequence (tuning seed 3, the robot 2 m from the first
+// obstacle): the page's data lists the obstacles on the line with their type and distance along
+// the line, nothing off the line, and the alarm distance set through the API turns the alarm on.
+TEST(BaseStation, ListsTheObstaclesOnTheLineOfTheMovingSequence) {
+  FrameSourceOptions source_options;
+  source_options.synthetic_start_m = 2.0;
+  BaseStationOptions options;
+  options.max_frames = 6;
+  BaseStation station(OpenFrameSource("synthetic:3", source_options), std::nullopt, options);
+  BaseStationServer server(&station);
+  const int port = server.Bind("127.0.0.1", 0);
+  ASSERT_GT(port, 0);
+  std::thread http([&] { server.Listen(); });
+  httplib::Client client("127.0.0.1", port);
+  client.set_read_timeout(60, 0);
+
+  auto bad = client.Post("/api/alarm", R"({"distance_m": -1})", "application/json");
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+  EXPECT_NE(bad->body.find("distance_m"), std::string::npos) << bad->body;
+  auto set = client.Post("/api/alarm", R"({"distance_m": 2.5})", "application/json");
+  ASSERT_TRUE(set);
+  ASSERT_EQ(set->status, 200);
+  EXPECT_EQ(nlohmann::json::parse(set->body)["alarm_distance_m"], 2.5);
+  EXPECT_EQ(nlohmann::json::parse(set->body)["finder"], "line");
+
+  station.Start();
+  while (station.running()) station.WaitForFrame(station.Snapshot().frame_index, 1.0);
+  EXPECT_EQ(station.error(), "");
+  auto result = client.Get("/api/result");
+  ASSERT_TRUE(result);
+  ASSERT_EQ(result->status, 200);
+  const auto j = nlohmann::json::parse(result->body);
+  ASSERT_TRUE(j.contains("line")) << result->body;
+  const auto& line = j["line"];
+  EXPECT_EQ(line["conductor"]["status"], "ok");
+  EXPECT_FALSE(line["conductor"]["line"]["image_uvd"].empty());
+
+  // The truth of the last frame, rendered from the same sequence.
+  sim::PowerLineSequenceOptions truth_options;
+  truth_options.seed = 3;
+  truth_options.start_gap_m = 2.0;
+  truth_options.scene.sensor.supersampling = 1;
+  const sim::PowerLineScene truth =
+      sim::PowerLineSequence(truth_options).Render(j["frame"].get<int>());
+  const sim::RenderedObstacle* first = &truth.obstacles.front();
+  for (const auto& o : truth.obstacles) {
+    if (o.near_arc_m < first->near_arc_m) first = &o;
+  }
+  ASSERT_FALSE(line["tracks"].empty()) << line.dump();
+  const auto& nearest = line["tracks"][0];
+  EXPECT_EQ(nearest["type"], sim::ObstacleTypeName(first->type)) << nearest.dump();
+  EXPECT_NEAR(nearest["arc_m"].get<double>(), first->near_arc_m, 0.05 * first->near_arc_m);
+  EXPECT_GT(nearest["approach_mps"].get<double>(), 0.0);
+  EXPECT_EQ(line["alarm"], nearest["arc_m"].get<double>() <= 2.5);
+  EXPECT_EQ(line["alarm_distance_m"], 2.5);
+  for (const auto& t : line["tracks"]) {
+    const cv::Rect box(t["box"][0], t["box"][1], t["box"][2], t["box"][3]);
+    bool on_an_obstacle = false;
+    for (const auto& o : truth.obstacles) on_an_obstacle |= (box & o.box).area() > 0;
+    EXPECT_TRUE(on_an_obstacle) << "a track that is not an obstacle of the scene: " << t.dump();
+  }
   server.Stop();
   http.join();
 }
