@@ -6,6 +6,7 @@
 #include <limits>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
@@ -107,9 +108,68 @@ LineObstacleType Classify(const LineObstacle& o, const LineObstacleOptions& opt)
   return LineObstacleType::kClamp;
 }
 
+// Whether a point lies on the conductor's image band (its half-width plus the fattening and a
+// margin) at a disparity near the conductor's there. Judged in the image, where the axis is known
+// to a pixel or two, rather than in 3D, where its depth error far away exceeds an obstacle's size.
+bool OnTheLine(const LinePoint& p, const ConductorModel& model, const StereoGeometry& g,
+               const LineObstacleOptions& o) {
+  const ConductorCurve& line = model.line;
+  const double r = line.radius_m > 0 ? line.radius_m : o.conductor.max_radius_m;
+  double tau = 0, lateral = 0;
+  line.ImageCoordinates(p.x, p.y, &tau, &lateral);
+  // Beyond the observed ends too: an obstacle hides the conductor behind it.
+  if (tau < line.tau_min - kHiddenLinePx || tau > line.tau_max + kHiddenLinePx) return false;
+  const double half_width = r * (p.d + g.disparity_offset_px) / g.baseline_m +
+                            o.conductor.fattening_px + o.attach_margin_px;
+  const double d_line = line.DisparityAt(tau);
+  if (std::fabs(lateral) > half_width) return false;
+  return std::fabs(p.d - d_line) <= 1.0 ||
+         (d_line + g.disparity_offset_px > 0 &&
+          std::fabs(p.z - g.DepthFromDisparity(d_line)) <= o.attach_depth_m);
+}
+
+// The points of a run that belong to an obstacle of this line: the run's 8-connected pieces in the
+// image (1 px gaps closed) that touch the conductor with at least min_attached_pixels points. A
+// piece of the tower or of a mismatched background that shares the run's stretch of line but is
+// not joined to the conductor is left out, so it neither makes an obstacle nor changes one's
+// shape. *attached counts the kept points on the line.
+std::vector<LinePoint> AttachedPieces(const std::vector<LinePoint>& run,
+                                      const ConductorModel& model, const StereoGeometry& g,
+                                      const LineObstacleOptions& o, int* attached) {
+  *attached = 0;
+  int x0 = run[0].x, x1 = run[0].x, y0 = run[0].y, y1 = run[0].y;
+  for (const LinePoint& p : run) {
+    x0 = std::min(x0, p.x);
+    x1 = std::max(x1, p.x);
+    y0 = std::min(y0, p.y);
+    y1 = std::max(y1, p.y);
+  }
+  cv::Mat mask = cv::Mat::zeros(y1 - y0 + 3, x1 - x0 + 3, CV_8UC1);
+  for (const LinePoint& p : run) mask.at<std::uint8_t>(p.y - y0 + 1, p.x - x0 + 1) = 255;
+  cv::Mat closed, labels;
+  cv::morphologyEx(mask, closed, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  const int count = cv::connectedComponents(closed, labels, 8, CV_32S);
+  std::vector<int> label(run.size()), on_line(count, 0);
+  for (size_t i = 0; i < run.size(); ++i) {
+    label[i] = labels.at<int>(run[i].y - y0 + 1, run[i].x - x0 + 1);
+    on_line[label[i]] += OnTheLine(run[i], model, g, o);
+  }
+  std::vector<LinePoint> kept;
+  for (size_t i = 0; i < run.size(); ++i) {
+    if (on_line[label[i]] < o.min_attached_pixels) continue;
+    kept.push_back(run[i]);
+  }
+  for (int l = 1; l < count; ++l) *attached += on_line[l] >= o.min_attached_pixels ? on_line[l] : 0;
+  return kept;
+}
+
 // Shape, box and mask of one run; false when it is not an obstacle of this line.
-bool Describe(const std::vector<LinePoint>& run, const ConductorModel& model,
+bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
               const StereoGeometry& g, const LineObstacleOptions& o, LineObstacle* out) {
+  if (static_cast<int>(all.size()) < o.min_pixels) return false;
+  int attached = 0;
+  const std::vector<LinePoint> run = AttachedPieces(all, model, g, o, &attached);
   if (static_cast<int>(run.size()) < o.min_pixels) return false;
   std::vector<double> z, arc, down, up, side;
   int x0 = run[0].x, x1 = run[0].x, y0 = run[0].y, y1 = run[0].y;
@@ -125,26 +185,6 @@ bool Describe(const std::vector<LinePoint>& run, const ConductorModel& model,
     y1 = std::max(y1, p.y);
   }
   const double fat = o.conductor.fattening_px * Quantile(z, 0.5) / g.focal_px;
-  // Touching: on the conductor's image band (its half-width plus the fattening and a margin) at a
-  // disparity near the conductor's there. Judged in the image, where the axis is known to a pixel
-  // or two, rather than in 3D, where its depth error far away exceeds an obstacle's size.
-  const ConductorCurve& line = model.line;
-  const double r = line.radius_m > 0 ? line.radius_m : o.conductor.max_radius_m;
-  int attached = 0;
-  for (const LinePoint& p : run) {
-    double tau = 0, lateral = 0;
-    line.ImageCoordinates(p.x, p.y, &tau, &lateral);
-    // Beyond the observed ends too: an obstacle hides the conductor behind it.
-    if (tau < line.tau_min - kHiddenLinePx || tau > line.tau_max + kHiddenLinePx) {
-      continue;
-    }
-    const double half_width = r * (p.d + g.disparity_offset_px) / g.baseline_m +
-                              o.conductor.fattening_px + o.attach_margin_px;
-    const double d_line = line.DisparityAt(tau);
-    attached += std::fabs(lateral) <= half_width &&
-                std::fabs(p.d - d_line) <=
-                    o.attach_disparity_relative * (d_line + g.disparity_offset_px) + 1.0;
-  }
   if (attached < o.min_attached_pixels) return false;
   out->pixels = static_cast<int>(run.size());
   out->length_m = std::max(0.0, Quantile(arc, 0.97) - Quantile(arc, 0.03));
@@ -240,9 +280,8 @@ void LineObstacleOptions::Check() const {
               cluster_gap_m, "must be in (0, 2) m");
   CheckOption(attach_margin_px >= 0 && attach_margin_px <= 20,
               "LineObstacleOptions.attach_margin_px", attach_margin_px, "must be in [0, 20] px");
-  CheckOption(attach_disparity_relative >= 0 && attach_disparity_relative < 0.5,
-              "LineObstacleOptions.attach_disparity_relative", attach_disparity_relative,
-              "must be in [0, 0.5)");
+  CheckOption(attach_depth_m >= 0 && attach_depth_m <= 2, "LineObstacleOptions.attach_depth_m",
+              attach_depth_m, "must be in [0, 2] m");
   CheckOption(speckle_window_px >= 0, "LineObstacleOptions.speckle_window_px", speckle_window_px,
               "must be >= 0");
   CheckOption(speckle_range_px >= 0 && speckle_range_px <= 100,

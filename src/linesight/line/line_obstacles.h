@@ -51,9 +51,11 @@ struct LineObstacleOptions {
   double max_arc_m = 8.0;       // farther along the line is not looked at (m)
   double cluster_gap_m = 0.12;  // a gap this long along the line separates two obstacles (m)
   // A pixel touches the conductor when it lies on the conductor's image band widened by this
-  // margin (px) at a disparity within this share (plus 1 px) of the conductor's there.
+  // margin (px) at a depth within attach_depth_m (or 1 px of disparity) of the conductor's there.
+  // 0.25 m is half the length of the longest obstacle (a damper, 0.45 m): seen along the line, its
+  // weights cover the band in front of and behind its clamp.
   double attach_margin_px = 2.0;
-  double attach_disparity_relative = 0.05;
+  double attach_depth_m = 0.25;
   // The conductor is fitted on the map as matched (a receding conductor is a chain of small
   // pieces a speckle filter deletes); obstacles and their distances are taken on a copy without
   // speckles: pieces of at most this many pixels whose 4-neighbours differ by at most
