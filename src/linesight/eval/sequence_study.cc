@@ -45,14 +45,26 @@ void SequenceStudyOptions::Check() const {
   tracker.Check();
 }
 
+namespace {
+
+// The sequence of `seed` with the study's sequence options.
+sim::PowerLineSequence SequenceOf(const SequenceStudyOptions& options, std::uint64_t seed) {
+  sim::PowerLineSequenceOptions o = options.sequence;
+  o.seed = seed;
+  return sim::PowerLineSequence(o);
+}
+
+// The frames of `sequence` the study scores (before the frame step).
+int FramesOf(const SequenceStudyOptions& options, const sim::PowerLineSequence& sequence) {
+  return options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
+}
+
+}  // namespace
+
 int SequenceStudyFrames(const SequenceStudyOptions& options) {
   int total = 0;
   for (std::uint64_t seed : options.seeds) {
-    sim::PowerLineSequenceOptions o = options.sequence;
-    o.seed = seed;
-    const sim::PowerLineSequence sequence(o);
-    const int n =
-        options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
+    const int n = FramesOf(options, SequenceOf(options, seed));
     total += (n + options.frame_step - 1) / options.frame_step;
   }
   return total;
@@ -189,11 +201,8 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
   const double tol = options.match_tolerance;
 
   for (std::uint64_t seed : options.seeds) {
-    sim::PowerLineSequenceOptions sequence_options = options.sequence;
-    sequence_options.seed = seed;
-    const sim::PowerLineSequence sequence(sequence_options);
-    const int n =
-        options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
+    const sim::PowerLineSequence sequence = SequenceOf(options, seed);
+    const int n = FramesOf(options, sequence);
     LineTracker tracker(options.tracker);
     ConductorModel previous;
     // Per truth id of this sequence.
@@ -217,7 +226,7 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
         if (match[k] >= 0) detection_of_truth[match[k]] = static_cast<int>(k);
       }
       ++report.frames;
-      report.duration_s += options.frame_step / sequence_options.fps;
+      report.duration_s += options.frame_step / options.sequence.fps;
 
       // Recall, type accuracy and errors over the scored truths.
       for (size_t t = 0; t < scene.obstacles.size(); ++t) {
@@ -292,12 +301,12 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
         following[truth.id] = track.id;
         followers[truth.id].insert(track.id);
         if (truth.near_arc_m < options.min_arc_m || truth.near_arc_m > options.max_arc_m) continue;
-        const double truth_ttr = truth.near_arc_m / sequence_options.speed_mps;
+        const double truth_ttr = truth.near_arc_m / options.sequence.speed_mps;
         if (track.time_to_reach_s > 0) {
           ttr_errors[truth.id].push_back(track.time_to_reach_s / truth_ttr - 1);
           acc.ttr.push_back(ttr_errors[truth.id].back());
         }
-        acc.rate.push_back(track.approach_mps / sequence_options.speed_mps - 1);
+        acc.rate.push_back(track.approach_mps / options.sequence.speed_mps - 1);
       }
       if (progress) {
         progress->Advance(1, fmt::format("seed {} frame {}/{}", seed, index + 1, n));

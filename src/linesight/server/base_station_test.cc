@@ -136,6 +136,24 @@ TEST(BaseStation, NeedsACalibration) {
   }
 }
 
+// A BaseStationServer on a free port of 127.0.0.1, listening on its own thread until destroyed,
+// and a client for it.
+struct LoopbackServer {
+  explicit LoopbackServer(BaseStation* station)
+      : server(station), port(server.Bind("127.0.0.1", 0)), client("127.0.0.1", port) {
+    http = std::thread([this] { server.Listen(); });
+    client.set_read_timeout(60, 0);
+  }
+  ~LoopbackServer() {
+    server.Stop();
+    http.join();
+  }
+  BaseStationServer server;
+  int port;
+  httplib::Client client;
+  std::thread http;
+};
+
 // The whole base station on the synthetic scene: the loop ranges a damper at 2 m, the HTTP API
 // serves status, result, images and ROI changes, and errors come back as JSON with 4xx.
 TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
@@ -148,12 +166,8 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   options.max_frames = 3;
   options.finder = AutoFinder::kRegions;
   BaseStation station(OpenFrameSource("synthetic:1", source_options), std::nullopt, options);
-  BaseStationServer server(&station);
-  const int port = server.Bind("127.0.0.1", 0);
-  ASSERT_GT(port, 0);
-  std::thread http([&] { server.Listen(); });
-  httplib::Client client("127.0.0.1", port);
-  client.set_read_timeout(60, 0);
+  LoopbackServer server(&station);
+  httplib::Client& client = server.client;
 
   // Before the first frame: 503 with a JSON error.
   auto early = client.Get("/api/frame/left.jpg");
@@ -227,9 +241,6 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   ASSERT_TRUE(missing);
   EXPECT_EQ(missing->status, 404);
   EXPECT_NE(missing->body.find("no such resource"), std::string::npos);
-
-  server.Stop();
-  http.join();
 }
 
 // The base station on the moving synthetic sequence (tuning seed 3, the robot 2 m from the first
@@ -241,12 +252,8 @@ TEST(BaseStation, ListsTheObstaclesOnTheLineOfTheMovingSequence) {
   BaseStationOptions options;
   options.max_frames = 6;
   BaseStation station(OpenFrameSource("synthetic:3", source_options), std::nullopt, options);
-  BaseStationServer server(&station);
-  const int port = server.Bind("127.0.0.1", 0);
-  ASSERT_GT(port, 0);
-  std::thread http([&] { server.Listen(); });
-  httplib::Client client("127.0.0.1", port);
-  client.set_read_timeout(60, 0);
+  LoopbackServer server(&station);
+  httplib::Client& client = server.client;
 
   auto bad = client.Post("/api/alarm", R"({"distance_m": -1})", "application/json");
   ASSERT_TRUE(bad);
@@ -294,8 +301,6 @@ TEST(BaseStation, ListsTheObstaclesOnTheLineOfTheMovingSequence) {
     for (const auto& o : truth.obstacles) on_an_obstacle |= (box & o.box).area() > 0;
     EXPECT_TRUE(on_an_obstacle) << "a track that is not an obstacle of the scene: " << t.dump();
   }
-  server.Stop();
-  http.join();
 }
 
 }  // namespace
