@@ -11,6 +11,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev  # libFuzzer targets (cmake -DLINESIGHT_FUZZ=ON, see src/linesight/io)
   python3-numpy python3-opencv
+  chromium  # the base-station page's browser tests (src/linesight/server/page_browser_test.mjs)
 )
 
 missing=()
@@ -20,14 +21,24 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 
+# Node.js runs the browser tests (playwright-core needs 20 or newer); Debian's nodejs where none is installed.
+command -v node >/dev/null || missing+=(nodejs npm)
+
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#PACKAGES[@]} packages present"
-  exit 0
+else
+  SUDO=""
+  if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -q
-$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+# playwright-core from npm, at the version package-lock.json pins, into ./node_modules (it drives
+# Debian's chromium; it never downloads a browser).
+cd "$(dirname "$0")/.."
+if [ ! -f node_modules/playwright-core/package.json ] || [ package-lock.json -nt node_modules/.package-lock.json ]; then
+  echo "install-deps: npm ci (playwright-core)"
+  npm ci --no-audit --no-fund --loglevel=error
+fi

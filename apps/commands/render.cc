@@ -106,6 +106,9 @@ int RunRender(int argc, char** argv) {
                  "sequence: robot speed along the line (m/s)")
       ->capture_default_str();
   app.add_option("--fps", sequence_options.fps, "sequence: frame rate (Hz)")->capture_default_str();
+  app.add_option("--start", sequence_options.start_gap_m,
+                 "sequence: arc from the robot to the first obstacle's near end at frame 0 (m)")
+      ->capture_default_str();
   app.add_option("--num-obstacles", sequence_options.num_obstacles,
                  "sequence: obstacles on the line (types and gaps from --seed)")
       ->capture_default_str();

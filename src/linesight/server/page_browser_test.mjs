@@ -1,0 +1,185 @@
+// The base-station page in a real browser: Debian's chromium, driven by playwright-core, against
+// `linesight serve` on the moving synthetic sequence (loopback only, a bounded run).
+//
+//   node page_browser_test.mjs --linesight BIN --out DIR
+//
+// Checks: the page loads without console errors; the images and the table update; pause holds
+// the frame and resume moves on; the automatic-finding switch turns finding off and on; a box
+// dragged on the nearest obstacle ranges it within 2 % of its true straight distance; when the
+// run ends, the nearest obstacle shown on the line is the scene's nearest, of its type, within
+// 2 % of its true distance along the line, and nothing else is listed that is not an obstacle of
+// the scene. Screenshots go to DIR. Exit 77 (skipped) without chromium or playwright-core, unless
+// CI=true, where both must be present.
+import { spawn, spawnSync } from "node:child_process";
+import fs from "node:fs";
+import path from "node:path";
+import process from "node:process";
+
+const CHROMIUM = "/usr/bin/chromium";
+const SEED = 3, START_M = 2.5, FRAMES = 30;
+const inCi = process.env.CI === "true";
+
+function arg(name) {
+  const i = process.argv.indexOf(name);
+  if (i < 0 || i + 1 >= process.argv.length) throw new Error(`usage: ${name} is required`);
+  return process.argv[i + 1];
+}
+function skip(why) {
+  if (inCi) { console.error(`FAIL: ${why} (CI=true needs it: scripts/install-deps.sh installs it)`); process.exit(1); }
+  console.log(`SKIPPED: ${why}`); process.exit(77);
+}
+function check(ok, what) {
+  if (!ok) throw new Error(`check failed: ${what}`);
+  console.log(`ok: ${what}`);
+}
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+async function until(what, fn, timeoutMs) {
+  const end = Date.now() + timeoutMs;
+  for (;;) {
+    const v = await fn();
+    if (v) return v;
+    if (Date.now() > end) throw new Error(`timed out after ${timeoutMs / 1000} s waiting for ${what}`);
+    await sleep(100);
+  }
+}
+
+const linesight = arg("--linesight"), out = arg("--out");
+if (!fs.existsSync(CHROMIUM)) skip(`${CHROMIUM} not found (Debian package chromium)`);
+let chromium;
+try {
+  ({ chromium } = await import("playwright-core"));
+} catch (e) {
+  skip(`playwright-core not installed (npm ci in the repository root): ${e.message}`);
+}
+fs.rmSync(out, { recursive: true, force: true });
+fs.mkdirSync(out, { recursive: true });
+
+// The truth of every frame: the same sequence rendered offline.
+const truthDir = path.join(out, "truth");
+const render = spawnSync(linesight, ["render", "--sequence", String(FRAMES), "--seed", String(SEED),
+  "--start", String(START_M), "--supersampling", "1", "--out", truthDir], { encoding: "utf8" });
+if (render.status !== 0) throw new Error(`render failed: ${render.stderr}`);
+const truth = fs.readFileSync(path.join(truthDir, "truth.jsonl"), "utf8").trim().split("\n").map((l) => JSON.parse(l));
+
+const server = spawn(linesight, ["serve", "--source", `synthetic:${SEED}`, "--synthetic-start", String(START_M),
+  "--port", "0", "--frames", String(FRAMES), "--threads", "1"], { stdio: ["ignore", "pipe", "pipe"] });
+let serverLog = "";
+server.stderr.on("data", (d) => { serverLog += d; });
+const base = await new Promise((resolve, reject) => {
+  let text = "";
+  const timer = setTimeout(() => reject(new Error(`serve printed no address in 60 s:\n${serverLog}`)), 60000);
+  server.stdout.on("data", (d) => {
+    text += d;
+    const m = text.match(/serving (http:\/\/127\.0\.0\.1:\d+)\//);
+    if (m) { clearTimeout(timer); resolve(m[1]); }
+  });
+  server.on("exit", (code) => reject(new Error(`serve exited (${code}) before serving:\n${serverLog}`)));
+});
+const api = async (p) => (await fetch(base + p)).json();
+
+const userDataDir = fs.mkdtempSync(path.join(out, "profile-"));
+const browser = await chromium.launchPersistentContext(userDataDir, {
+  executablePath: CHROMIUM, headless: true, viewport: { width: 1400, height: 1000 },
+  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run"],
+});
+let failed = false;
+try {
+  const page = browser.pages()[0] || (await browser.newPage());
+  const consoleErrors = [];
+  page.on("console", (m) => { if (m.type() === "error") consoleErrors.push(m.text()); });
+  page.on("pageerror", (e) => consoleErrors.push(String(e)));
+  await page.goto(base + "/");
+  check((await page.title()) === "linesight base station", "the page loads");
+
+  // Images and the table update.
+  await until("the first frame on the page", () => page.evaluate(() =>
+    document.getElementById("left").naturalWidth === 752 && document.getElementById("disparity").naturalWidth === 752), 60000);
+  const frameShown = () => page.evaluate(() => Number((document.getElementById("status").textContent.match(/frame (\d+)/) || [])[1]));
+  const f0 = await frameShown();
+  const src0 = await page.evaluate(() => document.getElementById("left").src);
+  await until("a newer frame", async () => (await frameShown()) > f0 &&
+    (await page.evaluate(() => document.getElementById("left").src)) !== src0, 30000);
+  check(true, `the images and the status update (frame ${f0} -> ${await frameShown()})`);
+  await until("an obstacle in the line table", () => page.evaluate(() =>
+    document.querySelectorAll("#line-tracks tr td:nth-child(2)").length > 0 &&
+    !document.getElementById("line-tracks").textContent.includes("nothing")), 60000);
+  check(true, "the line table lists an obstacle");
+  await page.screenshot({ path: path.join(out, "page-running.png"), fullPage: true });
+
+  // Pause holds the frame; resume moves on.
+  await page.click("#pause");
+  await until("the pause", async () => (await api("/api/status")).paused === true, 5000);
+  // A frame already in the pipeline is still published; then nothing moves.
+  const perFrameMs = Math.max(500, 2 * (await api("/api/status")).process_ms);
+  await sleep(perFrameMs);
+  const held = (await api("/api/status")).frame;
+  await sleep(perFrameMs);
+  const after = (await api("/api/status")).frame, button = await page.textContent("#pause");
+  check(after === held && button === "resume", `pause holds frame ${held} (then ${after}; button "${button}")`);
+  await page.click("#pause");
+  await until("frames after resume", async () => (await api("/api/status")).frame > held, 30000);
+  check(true, "resume moves on");
+
+  // The automatic-finding switch.
+  await page.uncheck("#auto");
+  await until("auto off", async () => (await api("/api/status")).auto === false, 5000);
+  check(true, "the switch turns automatic finding off");
+  await page.check("#auto");
+  await until("auto on", async () => (await api("/api/status")).auto === true, 5000);
+  check(true, "the switch turns automatic finding on");
+
+  // A drag on the nearest obstacle ranges it.
+  const now = await api("/api/status");
+  const nearestTruth = (f) => truth[f].obstacles.reduce((a, b) => (b.arc_distance_m < a.arc_distance_m ? b : a));
+  const target = nearestTruth(Math.min(now.frame + 5, FRAMES - 1));
+  const [bx, by, bw, bh] = target.box, grow = 8;
+  const box = await page.locator("#overlay").boundingBox();
+  const s = box.width / 752;
+  await page.mouse.move(box.x + (bx - grow) * s, box.y + (by - grow) * s);
+  await page.mouse.down();
+  await page.mouse.move(box.x + (bx + bw + grow) * s, box.y + (by + bh + grow) * s, { steps: 5 });
+  await page.mouse.up();
+  await until("the dragged region in the status", async () => (await api("/api/status")).rois.length === 1, 5000);
+  const ranged = await until("the dragged region ranged", async () => {
+    const r = await api("/api/result");
+    const t = r.tracks.find((k) => k.key === "roi:0" || String(k.key).startsWith("roi"));
+    return t && t.updates >= 2 ? { t, frame: r.frame } : null;
+  }, 60000);
+  const want = truth[ranged.frame].obstacles.find((o) => o.id === target.id).distance_m;
+  const err = (ranged.t.last_measurement_m - want) / want;
+  check(Math.abs(err) <= 0.02, `the dragged ${target.type} is ranged ${ranged.t.last_measurement_m.toFixed(3)} m for ` +
+    `${want.toFixed(3)} m (${(100 * err).toFixed(2)} %)`);
+  await page.screenshot({ path: path.join(out, "page-region.png"), fullPage: true });
+  await page.click("#clear");
+
+  // The end of the run: what the page shows against the truth of its last frame.
+  await until("the end of the run", async () => (await api("/api/status")).running === false, 120000);
+  await sleep(1500);  // the page's next poll
+  const last = await api("/api/result");
+  const first = nearestTruth(last.frame);
+  const shown = await page.textContent("#nearest");
+  const m = shown.match(/(damper|clamp|insulator|spacer|unknown) (\d+\.\d+) m/);
+  check(m !== null, `the nearest obstacle is shown ("${shown}")`);
+  check(m[1] === first.type, `its type is the scene's nearest (${first.type})`);
+  const arcErr = (Number(m[2]) - first.arc_distance_m) / first.arc_distance_m;
+  check(Math.abs(arcErr) <= 0.02, `along the line ${m[2]} m for ${first.arc_distance_m.toFixed(3)} m (${(100 * arcErr).toFixed(2)} %)`);
+  for (const t of last.line.tracks) {
+    const [x, y, w, h] = t.box;
+    const hit = truth[last.frame].obstacles.some((o) => x < o.box[0] + o.box[2] && o.box[0] < x + w && y < o.box[1] + o.box[3] && o.box[1] < y + h);
+    check(hit, `track #${t.id} (${t.type} at ${t.arc_m.toFixed(2)} m) is an obstacle of the scene`);
+  }
+  await page.screenshot({ path: path.join(out, "page-end.png"), fullPage: true });
+  check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
+} catch (e) {
+  failed = true;
+  console.error(`FAIL: ${e.message}\nserve's log:\n${serverLog}`);
+} finally {
+  await browser.close();
+  fs.rmSync(userDataDir, { recursive: true, force: true });
+  server.kill("SIGTERM");
+}
+const exitCode = await new Promise((r) => server.on("exit", (code) => r(code)));
+if (exitCode !== 0 && !failed) { console.error(`FAIL: serve exited with ${exitCode}`); failed = true; }
+console.log(failed ? "FAILED" : `passed; screenshots in ${out}`);
+process.exit(failed ? 1 : 0);
