@@ -1,7 +1,12 @@
 // linesight serve: the base station. Ranges a live stereo stream and serves the web page and JSON
 // API (src/linesight/server/base_station.h) that show it.
+#include <pthread.h>
+
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <thread>
@@ -21,10 +26,26 @@
 namespace linesight::cli {
 namespace {
 
-BaseStationServer* g_server = nullptr;
+using namespace std::chrono_literals;
 
-extern "C" void StopOnSignal(int) {
-  if (g_server) g_server->Stop();
+bool IsLoopback(const std::string& host) {
+  return host == "localhost" || host == "::1" || host.rfind("127.", 0) == 0;
+}
+
+// The access token: --token, or the first line of --token-file (the file keeps it out of the
+// process list). UsageError when both are given; InputError naming the file when it is unreadable
+// or empty.
+std::string ReadToken(const std::string& token, const std::string& token_file) {
+  if (token_file.empty()) return token;
+  if (!token.empty()) throw UsageError("give --token or --token-file, not both");
+  std::ifstream in(token_file);
+  std::string line;
+  if (!in || !std::getline(in, line)) {
+    throw InputError(fmt::format("{}: cannot read the access token", token_file));
+  }
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  if (line.empty()) throw InputError(fmt::format("{}: the access token is empty", token_file));
+  return line;
 }
 
 }  // namespace
@@ -49,6 +70,12 @@ int RunServe(int argc, char** argv) {
   app.add_option("--host", host, "address to listen on (0.0.0.0 = every interface)")
       ->capture_default_str();
   app.add_option("--port", port, "TCP port (0 = any free port)")->capture_default_str();
+  std::string token, token_file;
+  app.add_option("--token", token,
+                 "access token every change (POST) must carry as 'Authorization: Bearer TOKEN'; "
+                 "required with a --host other than loopback (open the page as "
+                 "http://HOST:PORT/#token=TOKEN)");
+  app.add_option("--token-file", token_file, "read the access token from this file's first line");
   app.add_option("--roi", roi_texts, "region x,y,w,h in rectified left pixels (repeatable)");
   app.add_flag("--no-auto", no_auto, "do not find obstacles automatically (only the ROIs)");
   app.add_option("--finder", finder,
@@ -85,11 +112,26 @@ int RunServe(int argc, char** argv) {
     if (options.rois.empty() && !options.auto_detect) {
       throw UsageError("--no-auto needs at least one --roi x,y,w,h");
     }
+    BaseStationServerOptions server_options;
+    server_options.token = ReadToken(token, token_file);
+    if (!IsLoopback(host) && server_options.token.empty()) {
+      throw UsageError(fmt::format(
+          "--host {} is reachable from other machines: give an access token (--token or "
+          "--token-file), or listen on 127.0.0.1",
+          host));
+    }
+    // SIGINT and SIGTERM are taken by sigwait below, never by a handler: every thread started
+    // from here on inherits the blocked mask.
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGINT);
+    sigaddset(&stop_signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
     std::optional<StereoCalibration> calib;
     if (!calib_path.empty()) calib = ReadStereoCalibration(calib_path);
     std::fprintf(stderr, "opening %s ...\n", source_spec.c_str());
     BaseStation station(OpenFrameSource(source_spec, source_options), calib, options);
-    BaseStationServer server(&station);
+    BaseStationServer server(&station, server_options);
     const int bound = server.Bind(host, port);
     const nlohmann::json status = station.Status();
     std::fprintf(stderr, "source: %s\ncalibration: %s\nmatcher %s over disparities %d..%d\n",
@@ -100,12 +142,27 @@ int RunServe(int argc, char** argv) {
                  status["searched_disparities"][1].get<int>());
     // The port line goes to stdout (scripts read it); everything else to stderr.
     std::cout << fmt::format("serving http://{}:{}/ (Ctrl-C stops)", host, bound) << std::endl;
-    g_server = &server;
-    std::signal(SIGINT, StopOnSignal);
-    std::signal(SIGTERM, StopOnSignal);
     station.Start();
-    server.Listen();
-    g_server = nullptr;
+    std::thread http([&] { server.Listen(); });
+    int signal_number = 0;
+    sigwait(&stop_signals, &signal_number);
+    const auto signalled = std::chrono::steady_clock::now();
+    std::fprintf(stderr, "%s: stopping\n", signal_number == SIGINT ? "SIGINT" : "SIGTERM");
+    // The loop first (requests waiting for its next frame return at once), then the server, which
+    // closes stalled connections within its I/O timeout.
+    station.RequestStop();
+    server.Stop();
+    http.join();
+    // A frame still in the matcher is not waited for beyond 1 s after the signal: the process
+    // ends without it (it holds nothing that outlives the process).
+    while (station.running() && std::chrono::steady_clock::now() - signalled < 1000ms) {
+      std::this_thread::sleep_for(10ms);
+    }
+    if (station.running()) {
+      std::fprintf(stderr, "stopped without waiting for the frame in progress\n");
+      std::fflush(nullptr);
+      std::_Exit(0);
+    }
     station.Stop();
     if (!station.error().empty()) throw InputError(station.error());
   });

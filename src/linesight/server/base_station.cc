@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -99,9 +100,13 @@ void BaseStation::Start() {
   thread_ = std::thread([this] { Loop(); });
 }
 
-void BaseStation::Stop() {
+void BaseStation::RequestStop() {
   stop_ = true;
   published_.notify_all();
+}
+
+void BaseStation::Stop() {
+  RequestStop();
   if (thread_.joinable()) thread_.join();
   running_ = false;
 }
@@ -357,10 +362,59 @@ void SendJpeg(httplib::Response& res, const std::vector<uint8_t>& bytes) {
 
 }  // namespace
 
-BaseStationServer::BaseStationServer(BaseStation* station) : impl_(std::make_unique<Impl>()) {
+void BaseStationServerOptions::Check() const {
+  CheckOption(io_timeout_s >= 1 && io_timeout_s <= 60, "BaseStationServerOptions.io_timeout_s",
+              io_timeout_s, "must be in 1..60 s");
+  CheckOption(workers >= 2 && workers <= 1024, "BaseStationServerOptions.workers", workers,
+              "must be in 2..1024");
+  for (const char c : token) {
+    CheckOption(c > ' ' && c < 127, "BaseStationServerOptions.token", "(hidden)",
+                "must be printable ASCII without spaces");
+  }
+}
+
+BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServerOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  options.Check();
   impl_->station = station;
   httplib::Server& http = impl_->http;
   http.set_payload_max_length(64 * 1024);  // the API takes small JSON bodies only
+  http.set_read_timeout(options.io_timeout_s, 0);
+  http.set_keep_alive_timeout(options.io_timeout_s);
+  http.set_write_timeout(5, 0);
+  const int workers = options.workers;
+  http.new_task_queue = [workers] { return new httplib::ThreadPool(size_t(workers)); };
+  // Every route and its method: a known path asked with another method answers 405.
+  static const std::map<std::string, std::string> kRoutes = {
+      {"/", "GET"},           {"/favicon.ico", "GET"},        {"/api/status", "GET"},
+      {"/api/result", "GET"}, {"/api/frame/left.jpg", "GET"}, {"/api/frame/disparity.jpg", "GET"},
+      {"/api/rois", "POST"},  {"/api/alarm", "POST"},         {"/api/pause", "POST"},
+      {"/api/resume", "POST"}};
+  const std::string bearer = options.token.empty() ? "" : "Bearer " + options.token;
+  http.set_pre_routing_handler([bearer](const httplib::Request& req, httplib::Response& res) {
+    const auto route = kRoutes.find(req.path);
+    if (route == kRoutes.end()) return httplib::Server::HandlerResponse::Unhandled;
+    const bool allowed =
+        req.method == route->second || (req.method == "HEAD" && route->second == "GET");
+    if (!allowed) {
+      res.set_header("Allow", route->second);
+      SendError(res, 405, fmt::format("{} takes {}, not {}", req.path, route->second, req.method));
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    if (req.method != "POST") return httplib::Server::HandlerResponse::Unhandled;
+    if (!bearer.empty() && req.get_header_value("Authorization") != bearer) {
+      res.set_header("WWW-Authenticate", "Bearer");
+      SendError(res, 401, "this server needs its access token: Authorization: Bearer <token>");
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    const std::string type = req.get_header_value("Content-Type");
+    if (type.rfind("application/json", 0) != 0) {
+      SendError(res, 415,
+                fmt::format("{} takes Content-Type application/json, got '{}'", req.path, type));
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
   http.Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(BaseStationPage(), "text/html; charset=utf-8");
   });
@@ -424,9 +478,16 @@ BaseStationServer::BaseStationServer(BaseStation* station) : impl_(std::make_uni
     station->SetPaused(false);
     SendJson(res, station->Status());
   });
+  // Errors that httplib answers itself get a JSON body too.
   http.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
     if (res.status == 404) {
       SendError(res, 404, fmt::format("no such resource: {} {}", req.method, req.path));
+    } else if (res.body.empty() && res.status >= 400) {
+      const std::string what = res.status == 413 ? "the request body is over 64 kB"
+                               : res.status == 414
+                                   ? "the request URL is too long"
+                                   : fmt::format("the request was refused ({})", res.status);
+      SendError(res, res.status, what);
     }
   });
 }

@@ -21,8 +21,11 @@
 //   POST /api/alarm           {"distance_m": x}: the alarm distance along the line (m)
 //   POST /api/pause, /api/resume
 //
-// Every API error answers 4xx with {"error": "<what is wrong>"}. The HTTP layer only parses and
-// presents; all work is in the library.
+// Every API error answers 4xx with {"error": "<what is wrong>"}: 404 for an unknown path, 405 (with
+// Allow) for a known path with the wrong method, 415 for a POST whose Content-Type is not
+// application/json (a page of another origin cannot send that without a CORS preflight, which is
+// never granted), 401 for a POST without the access token when one is set, 413 for a body over
+// 64 kB. The HTTP layer only parses and presents; all work is in the library.
 #pragma once
 
 #include <atomic>
@@ -99,6 +102,9 @@ class BaseStation {
   void Start();
   // Stops it and waits (idempotent).
   void Stop();
+  // Asks the loop to stop after the frame it is processing, without waiting; running() turns false
+  // when it has.
+  void RequestStop();
   // Processes one frame on the calling thread (what the thread does in a loop). Returns false
   // when the source has ended.
   bool Step();
@@ -146,10 +152,22 @@ class BaseStation {
   std::thread thread_;
 };
 
+struct BaseStationServerOptions {
+  // When not empty, every state-changing request (POST) must carry "Authorization: Bearer
+  // <token>" (401 otherwise). `serve` requires one to listen on anything but loopback.
+  std::string token;
+  // Seconds a connection may stall mid-request, or idle between keep-alive requests, before it is
+  // closed: bounds how long a half-sent request holds a worker, and so the exit after Stop().
+  int io_timeout_s = 1;
+  int workers = 32;  // concurrent connections served (each poller holds one)
+
+  void Check() const;
+};
+
 // The HTTP front end of a BaseStation.
 class BaseStationServer {
  public:
-  explicit BaseStationServer(BaseStation* station);
+  explicit BaseStationServer(BaseStation* station, const BaseStationServerOptions& options = {});
   ~BaseStationServer();
   BaseStationServer(const BaseStationServer&) = delete;
   BaseStationServer& operator=(const BaseStationServer&) = delete;

@@ -1,0 +1,184 @@
+// The base-station server under load, bad requests and signals (loopback only, bounded in count
+// and time):
+//
+//   node server_reliability_test.mjs --linesight BIN [--clients 20] [--seconds 30] [--json FILE]
+//
+// 1. Bad requests answer 4xx with a JSON error and the server keeps serving: malformed JSON, wrong
+//    types, an ROI outside the image, an oversize body (413), unknown paths and path traversal
+//    (404), a wrong method (405 with Allow), a POST that is not JSON (415), a 100 kB URL (414), and
+//    a request sent in half and left open.
+// 2. Load: `--clients` concurrent clients for `--seconds` on the API and the images: no failed
+//    request, RSS growth under 10 % (from after a warm-up).
+// 3. With an access token: a POST without it or with a wrong one gets 401, with it 200.
+// 4. SIGTERM, and SIGINT, with a half-sent request open: the server exits cleanly within 2 s.
+// Prints the figures; --json writes them.
+import { spawn } from "node:child_process";
+import fs from "node:fs";
+import net from "node:net";
+import process from "node:process";
+
+function arg(name, fallback) {
+  const i = process.argv.indexOf(name);
+  if (i < 0) {
+    if (fallback === undefined) throw new Error(`usage: ${name} is required`);
+    return fallback;
+  }
+  return process.argv[i + 1];
+}
+const linesight = arg("--linesight"), clients = Number(arg("--clients", "20"));
+const seconds = Number(arg("--seconds", "30")), jsonPath = arg("--json", "");
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+let failures = 0;
+function check(ok, what) {
+  console.log(`${ok ? "ok" : "FAIL"}: ${what}`);
+  if (!ok) failures++;
+}
+
+// A still synthetic scene at a capped rate: the server, not the matcher, is under test.
+async function startServer(extra = []) {
+  const child = spawn(linesight, ["serve", "--source", "synthetic:1", "--synthetic-speed", "0",
+    "--port", "0", "--max-fps", "2", "--threads", "1", ...extra], { stdio: ["ignore", "pipe", "pipe"] });
+  let log = "";
+  child.stderr.on("data", (d) => { log += d; });
+  const base = await new Promise((resolve, reject) => {
+    let text = "";
+    const timer = setTimeout(() => reject(new Error(`serve printed no address in 60 s:\n${log}`)), 60000);
+    child.stdout.on("data", (d) => {
+      text += d;
+      const m = text.match(/serving (http:\/\/127\.0\.0\.1:(\d+))\//);
+      if (m) { clearTimeout(timer); resolve(m[1]); }
+    });
+    child.on("exit", (code) => reject(new Error(`serve exited (${code}) before serving:\n${log}`)));
+  });
+  const port = Number(base.split(":")[2]);
+  const exited = new Promise((r) => child.on("exit", (code, signal) => r({ code, signal, at: Date.now() })));
+  return { child, base, port, exited, log: () => log };
+}
+function rssKb(pid) {
+  const m = fs.readFileSync(`/proc/${pid}/status`, "utf8").match(/VmRSS:\s+(\d+)/);
+  return Number(m[1]);
+}
+async function waitFirstFrame(base) {
+  const end = Date.now() + 60000;
+  while (Date.now() < end) {
+    const s = await (await fetch(base + "/api/status")).json();
+    if (s.frame >= 0) return;
+    await sleep(200);
+  }
+  throw new Error("no frame in 60 s");
+}
+// A request written in part (headers promise a body that never comes), the socket left open.
+function halfSent(port) {
+  return new Promise((resolve, reject) => {
+    const s = net.connect(port, "127.0.0.1", () => {
+      s.write("POST /api/rois HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\nContent-Length: 100\r\n\r\n{\"ro");
+      resolve(s);
+    });
+    s.on("error", () => {});
+    s.setTimeout(20000, () => s.destroy());
+    s.once("error", reject);
+  });
+}
+async function expectStatus(base, path, init, status, what) {
+  const res = await fetch(base + path, init);
+  const text = await res.text();
+  let error = "";
+  try { error = JSON.parse(text).error || ""; } catch { error = ""; }
+  check(res.status === status && (status < 400 || error.length > 0),
+    `${what}: ${res.status}${error ? ` "${error}"` : ""}${res.headers.get("allow") ? ` (Allow: ${res.headers.get("allow")})` : ""}`);
+  return res;
+}
+const json = (body, extra = {}) => ({ method: "POST", headers: { "Content-Type": "application/json", ...extra }, body });
+
+const figures = {};
+const server = await startServer();
+try {
+  await waitFirstFrame(server.base);
+  const b = server.base;
+  // 1. Bad requests.
+  const open = await halfSent(server.port);
+  await expectStatus(b, "/api/rois", json("{\"rois\": [[1, 2"), 400, "malformed JSON");
+  await expectStatus(b, "/api/rois", json("{\"rois\": \"all\"}"), 400, "wrong type");
+  await expectStatus(b, "/api/rois", json("{\"rois\": [[700, 10, 100, 50]]}"), 400, "ROI outside the image");
+  await expectStatus(b, "/api/alarm", json("{\"distance_m\": 1e9}"), 400, "alarm out of range");
+  await expectStatus(b, "/api/rois", json("x".repeat(12 << 20)), 413, "12 MB body");
+  await expectStatus(b, "/api/nothing", {}, 404, "unknown path");
+  await expectStatus(b, "/../../etc/passwd", {}, 404, "path traversal");
+  await expectStatus(b, "/%2e%2e/%2e%2e/etc/passwd", {}, 404, "encoded path traversal");
+  await expectStatus(b, "/api/status", { method: "POST", headers: { "Content-Type": "application/json" }, body: "{}" }, 405, "POST on a GET route");
+  await expectStatus(b, "/api/pause", {}, 405, "GET on a POST route");
+  await expectStatus(b, "/api/rois", { method: "DELETE" }, 405, "DELETE");
+  await expectStatus(b, "/api/pause", { method: "POST", headers: { "Content-Type": "text/plain" }, body: "" }, 415, "POST as text/plain (what another origin can send)");
+  await expectStatus(b, "/api/status?x=" + "a".repeat(100000), {}, 414, "100 kB URL");
+  const cors = await fetch(b + "/api/status", { headers: { Origin: "http://elsewhere.example" } });
+  check(!cors.headers.get("access-control-allow-origin"), "no CORS header for another origin");
+  await expectStatus(b, "/api/status", {}, 200, "still serving with a half-sent request open");
+
+  // 2. Load.
+  const paths = ["/api/status", "/api/result", "/api/frame/left.jpg", "/api/frame/disparity.jpg"];
+  const warm = Date.now() + 3000;
+  while (Date.now() < warm) await Promise.all(paths.map((p) => fetch(b + p).then((r) => r.arrayBuffer())));
+  const rss0 = rssKb(server.child.pid);
+  let ok = 0, failed = 0, maxMs = 0;
+  const end = Date.now() + seconds * 1000;
+  const worker = async (k) => {
+    for (let i = k; Date.now() < end; i++) {
+      const t = Date.now();
+      try {
+        const res = await fetch(b + paths[i % paths.length] + (i % 8 === 1 ? "?after=-1" : ""));
+        await res.arrayBuffer();
+        if (res.status === 200) ok++; else failed++;
+      } catch { failed++; }
+      maxMs = Math.max(maxMs, Date.now() - t);
+    }
+  };
+  await Promise.all(Array.from({ length: clients }, (_, k) => worker(k)));
+  const rss1 = rssKb(server.child.pid);
+  Object.assign(figures, { clients, seconds, requests: ok + failed, failed, max_latency_ms: maxMs,
+    rss_start_mb: rss0 / 1024, rss_end_mb: rss1 / 1024, rss_growth: rss1 / rss0 - 1 });
+  check(failed === 0, `${clients} clients for ${seconds} s: ${ok + failed} requests, ${failed} failed, slowest ${maxMs} ms`);
+  check(rss1 / rss0 - 1 < 0.10, `RSS ${(rss0 / 1024).toFixed(0)} -> ${(rss1 / 1024).toFixed(0)} MB (${(100 * (rss1 / rss0 - 1)).toFixed(1)} %)`);
+
+  // 4. SIGTERM with a half-sent request open.
+  const open2 = await halfSent(server.port);
+  const t = Date.now();
+  server.child.kill("SIGTERM");
+  const e = await Promise.race([server.exited, sleep(10000).then(() => null)]);
+  const ms = e ? e.at - t : Infinity;
+  figures.sigterm_exit_ms = ms;
+  check(e && e.code === 0 && ms <= 2000, `SIGTERM with half-sent requests open: exit ${e ? e.code : "none"} after ${ms} ms`);
+  open.destroy(); open2.destroy();
+} catch (e) {
+  failures++;
+  console.error(`FAIL: ${e.message}\nserve's log:\n${server.log()}`);
+} finally {
+  server.child.kill("SIGKILL");
+}
+
+// 3. The access token, and SIGINT.
+const secret = "s3cret-token";
+const guarded = await startServer(["--token", secret]);
+try {
+  await waitFirstFrame(guarded.base);
+  const g = guarded.base;
+  await expectStatus(g, "/api/pause", json(""), 401, "POST without the token");
+  await expectStatus(g, "/api/pause", json("", { Authorization: "Bearer wrong" }), 401, "POST with a wrong token");
+  await expectStatus(g, "/api/pause", json("", { Authorization: `Bearer ${secret}` }), 200, "POST with the token");
+  await expectStatus(g, "/api/status", {}, 200, "GET needs no token");
+  const open = await halfSent(guarded.port);
+  const t = Date.now();
+  guarded.child.kill("SIGINT");
+  const e = await Promise.race([guarded.exited, sleep(10000).then(() => null)]);
+  const ms = e ? e.at - t : Infinity;
+  figures.sigint_exit_ms = ms;
+  check(e && e.code === 0 && ms <= 2000, `SIGINT with a half-sent request open: exit ${e ? e.code : "none"} after ${ms} ms`);
+  open.destroy();
+} catch (e) {
+  failures++;
+  console.error(`FAIL: ${e.message}\nserve's log:\n${guarded.log()}`);
+} finally {
+  guarded.child.kill("SIGKILL");
+}
+if (jsonPath) fs.writeFileSync(jsonPath, JSON.stringify(figures, null, 2) + "\n");
+console.log(failures ? `FAILED (${failures})` : "passed");
+process.exit(failures ? 1 : 0);
