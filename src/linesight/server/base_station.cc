@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
@@ -341,6 +342,8 @@ struct BaseStationServer::Impl {
 
 namespace {
 
+constexpr size_t kMaxBodyBytes = 64 * 1024;  // the API takes small JSON bodies only
+
 void SendJson(httplib::Response& res, const nlohmann::json& j, int status = 200) {
   res.status = status;
   res.set_header("Cache-Control", "no-store");
@@ -378,22 +381,20 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
   options.Check();
   impl_->station = station;
   httplib::Server& http = impl_->http;
-  http.set_payload_max_length(64 * 1024);  // the API takes small JSON bodies only
+  http.set_payload_max_length(kMaxBodyBytes);
   http.set_read_timeout(options.io_timeout_s, 0);
   http.set_keep_alive_timeout(options.io_timeout_s);
   http.set_write_timeout(5, 0);
   const int workers = options.workers;
   http.new_task_queue = [workers] { return new httplib::ThreadPool(size_t(workers)); };
-  // Every route and its method: a known path asked with another method answers 405.
-  static const std::map<std::string, std::string> kRoutes = {
-      {"/", "GET"},           {"/favicon.ico", "GET"},        {"/api/status", "GET"},
-      {"/api/result", "GET"}, {"/api/frame/left.jpg", "GET"}, {"/api/frame/disparity.jpg", "GET"},
-      {"/api/rois", "POST"},  {"/api/alarm", "POST"},         {"/api/pause", "POST"},
-      {"/api/resume", "POST"}};
+  // Every route and its method, filled by the registrations below: a known path asked with another
+  // method answers 405.
+  auto routes = std::make_shared<std::map<std::string, std::string>>();
   const std::string bearer = options.token.empty() ? "" : "Bearer " + options.token;
-  http.set_pre_routing_handler([bearer](const httplib::Request& req, httplib::Response& res) {
-    const auto route = kRoutes.find(req.path);
-    if (route == kRoutes.end()) return httplib::Server::HandlerResponse::Unhandled;
+  http.set_pre_routing_handler([bearer, routes](const httplib::Request& req,
+                                                httplib::Response& res) {
+    const auto route = routes->find(req.path);
+    if (route == routes->end()) return httplib::Server::HandlerResponse::Unhandled;
     const bool allowed =
         req.method == route->second || (req.method == "HEAD" && route->second == "GET");
     if (!allowed) {
@@ -415,16 +416,24 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });
-  http.Get("/", [](const httplib::Request&, httplib::Response& res) {
+  const auto get = [&](const std::string& path, httplib::Server::Handler handler) {
+    (*routes)[path] = "GET";
+    http.Get(path, std::move(handler));
+  };
+  const auto post = [&](const std::string& path, httplib::Server::Handler handler) {
+    (*routes)[path] = "POST";
+    http.Post(path, std::move(handler));
+  };
+  get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(BaseStationPage(), "text/html; charset=utf-8");
   });
-  http.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) {
+  get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) {
     res.status = 204;  // no icon; answered so that browsers do not log a 404
   });
-  http.Get("/api/status", [station](const httplib::Request&, httplib::Response& res) {
+  get("/api/status", [station](const httplib::Request&, httplib::Response& res) {
     SendJson(res, station->Status());
   });
-  http.Get("/api/result", [station](const httplib::Request& req, httplib::Response& res) {
+  get("/api/result", [station](const httplib::Request& req, httplib::Response& res) {
     // ?after=N waits (up to 2 s) for a frame newer than N: clients poll without busy loops.
     if (req.has_param("after")) {
       const std::string text = req.get_param_value("after");
@@ -446,13 +455,13 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     }
     SendJson(res, snap.result);
   });
-  http.Get("/api/frame/left.jpg", [station](const httplib::Request&, httplib::Response& res) {
+  get("/api/frame/left.jpg", [station](const httplib::Request&, httplib::Response& res) {
     SendJpeg(res, station->Snapshot().left_jpeg);
   });
-  http.Get("/api/frame/disparity.jpg", [station](const httplib::Request&, httplib::Response& res) {
+  get("/api/frame/disparity.jpg", [station](const httplib::Request&, httplib::Response& res) {
     SendJpeg(res, station->Snapshot().disparity_jpeg);
   });
-  http.Post("/api/rois", [station](const httplib::Request& req, httplib::Response& res) {
+  post("/api/rois", [station](const httplib::Request& req, httplib::Response& res) {
     try {
       station->SetRois(ParseRoiRequest(req.body, station->image_size()));
     } catch (const InputError& e) {
@@ -461,7 +470,7 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     }
     SendJson(res, station->Status());
   });
-  http.Post("/api/alarm", [station](const httplib::Request& req, httplib::Response& res) {
+  post("/api/alarm", [station](const httplib::Request& req, httplib::Response& res) {
     try {
       station->SetAlarmDistance(ParseAlarmRequest(req.body));
     } catch (const InputError& e) {
@@ -470,11 +479,11 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     }
     SendJson(res, station->Status());
   });
-  http.Post("/api/pause", [station](const httplib::Request&, httplib::Response& res) {
+  post("/api/pause", [station](const httplib::Request&, httplib::Response& res) {
     station->SetPaused(true);
     SendJson(res, station->Status());
   });
-  http.Post("/api/resume", [station](const httplib::Request&, httplib::Response& res) {
+  post("/api/resume", [station](const httplib::Request&, httplib::Response& res) {
     station->SetPaused(false);
     SendJson(res, station->Status());
   });
@@ -483,10 +492,10 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     if (res.status == 404) {
       SendError(res, 404, fmt::format("no such resource: {} {}", req.method, req.path));
     } else if (res.body.empty() && res.status >= 400) {
-      const std::string what = res.status == 413 ? "the request body is over 64 kB"
-                               : res.status == 414
-                                   ? "the request URL is too long"
-                                   : fmt::format("the request was refused ({})", res.status);
+      const std::string what =
+          res.status == 413   ? fmt::format("the request body is over {} kB", kMaxBodyBytes / 1024)
+          : res.status == 414 ? "the request URL is too long"
+                              : fmt::format("the request was refused ({})", res.status);
       SendError(res, res.status, what);
     }
   });

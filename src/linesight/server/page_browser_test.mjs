@@ -10,10 +10,12 @@
 // 2 % of its true distance along the line, and nothing else is listed that is not an obstacle of
 // the scene. Screenshots go to DIR. Exit 77 (skipped) without chromium or playwright-core, unless
 // CI=true, where both must be present.
-import { spawn, spawnSync } from "node:child_process";
+import { spawnSync } from "node:child_process";
 import fs from "node:fs";
 import path from "node:path";
 import process from "node:process";
+
+import { startServe } from "./serve_process.mjs";
 
 const CHROMIUM = "/usr/bin/chromium";
 const SEED = 3, START_M = 2.5, FRAMES = 30;
@@ -61,20 +63,9 @@ const render = spawnSync(linesight, ["render", "--sequence", String(FRAMES), "--
 if (render.status !== 0) throw new Error(`render failed: ${render.stderr}`);
 const truth = fs.readFileSync(path.join(truthDir, "truth.jsonl"), "utf8").trim().split("\n").map((l) => JSON.parse(l));
 
-const server = spawn(linesight, ["serve", "--source", `synthetic:${SEED}`, "--synthetic-start", String(START_M),
-  "--port", "0", "--frames", String(FRAMES), "--threads", "1"], { stdio: ["ignore", "pipe", "pipe"] });
-let serverLog = "";
-server.stderr.on("data", (d) => { serverLog += d; });
-const base = await new Promise((resolve, reject) => {
-  let text = "";
-  const timer = setTimeout(() => reject(new Error(`serve printed no address in 60 s:\n${serverLog}`)), 60000);
-  server.stdout.on("data", (d) => {
-    text += d;
-    const m = text.match(/serving (http:\/\/127\.0\.0\.1:\d+)\//);
-    if (m) { clearTimeout(timer); resolve(m[1]); }
-  });
-  server.on("exit", (code) => reject(new Error(`serve exited (${code}) before serving:\n${serverLog}`)));
-});
+const server = await startServe(linesight, ["--source", `synthetic:${SEED}`, "--synthetic-start", String(START_M),
+  "--frames", String(FRAMES), "--threads", "1"]);
+const base = server.base;
 const api = async (p) => (await fetch(base + p)).json();
 
 const userDataDir = fs.mkdtempSync(path.join(out, "profile-"));
@@ -173,13 +164,13 @@ try {
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? ": " + consoleErrors.join(" | ") : ""}`);
 } catch (e) {
   failed = true;
-  console.error(`FAIL: ${e.message}\nserve's log:\n${serverLog}`);
+  console.error(`FAIL: ${e.message}\nserve's log:\n${server.log()}`);
 } finally {
   await browser.close();
   fs.rmSync(userDataDir, { recursive: true, force: true });
-  server.kill("SIGTERM");
+  server.child.kill("SIGTERM");
 }
-const exitCode = await new Promise((r) => server.on("exit", (code) => r(code)));
+const exitCode = (await server.exited).code;
 if (exitCode !== 0 && !failed) { console.error(`FAIL: serve exited with ${exitCode}`); failed = true; }
 console.log(failed ? "FAILED" : `passed; screenshots in ${out}`);
 process.exit(failed ? 1 : 0);

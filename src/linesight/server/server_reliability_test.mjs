@@ -12,10 +12,11 @@
 // 3. With an access token: a POST without it or with a wrong one gets 401, with it 200.
 // 4. SIGTERM, and SIGINT, with a half-sent request open: the server exits cleanly within 2 s.
 // Prints the figures; --json writes them.
-import { spawn } from "node:child_process";
 import fs from "node:fs";
 import net from "node:net";
 import process from "node:process";
+
+import { startServe } from "./serve_process.mjs";
 
 function arg(name, fallback) {
   const i = process.argv.indexOf(name);
@@ -35,24 +36,18 @@ function check(ok, what) {
 }
 
 // A still synthetic scene at a capped rate: the server, not the matcher, is under test.
-async function startServer(extra = []) {
-  const child = spawn(linesight, ["serve", "--source", "synthetic:1", "--synthetic-speed", "0",
-    "--port", "0", "--max-fps", "2", "--threads", "1", ...extra], { stdio: ["ignore", "pipe", "pipe"] });
-  let log = "";
-  child.stderr.on("data", (d) => { log += d; });
-  const base = await new Promise((resolve, reject) => {
-    let text = "";
-    const timer = setTimeout(() => reject(new Error(`serve printed no address in 60 s:\n${log}`)), 60000);
-    child.stdout.on("data", (d) => {
-      text += d;
-      const m = text.match(/serving (http:\/\/127\.0\.0\.1:(\d+))\//);
-      if (m) { clearTimeout(timer); resolve(m[1]); }
-    });
-    child.on("exit", (code) => reject(new Error(`serve exited (${code}) before serving:\n${log}`)));
-  });
-  const port = Number(base.split(":")[2]);
-  const exited = new Promise((r) => child.on("exit", (code, signal) => r({ code, signal, at: Date.now() })));
-  return { child, base, port, exited, log: () => log };
+const startServer = (extra = []) => startServe(linesight, ["--source", "synthetic:1", "--synthetic-speed", "0",
+  "--max-fps", "2", "--threads", "1", ...extra]);
+// Sends `signal` with a half-sent request open: the server must exit 0 within 2 s.
+async function expectCleanExit(server, signal) {
+  const open = await halfSent(server.port);
+  const t = Date.now();
+  server.child.kill(signal);
+  const e = await Promise.race([server.exited, sleep(10000).then(() => null)]);
+  const ms = e ? e.at - t : Infinity;
+  check(e && e.code === 0 && ms <= 2000, `${signal} with a half-sent request open: exit ${e ? e.code : "none"} after ${ms} ms`);
+  open.destroy();
+  return ms;
 }
 function rssKb(pid) {
   const m = fs.readFileSync(`/proc/${pid}/status`, "utf8").match(/VmRSS:\s+(\d+)/);
@@ -139,15 +134,9 @@ try {
   check(failed === 0, `${clients} clients for ${seconds} s: ${ok + failed} requests, ${failed} failed, slowest ${maxMs} ms`);
   check(rss1 / rss0 - 1 < 0.10, `RSS ${(rss0 / 1024).toFixed(0)} -> ${(rss1 / 1024).toFixed(0)} MB (${(100 * (rss1 / rss0 - 1)).toFixed(1)} %)`);
 
-  // 4. SIGTERM with a half-sent request open.
-  const open2 = await halfSent(server.port);
-  const t = Date.now();
-  server.child.kill("SIGTERM");
-  const e = await Promise.race([server.exited, sleep(10000).then(() => null)]);
-  const ms = e ? e.at - t : Infinity;
-  figures.sigterm_exit_ms = ms;
-  check(e && e.code === 0 && ms <= 2000, `SIGTERM with half-sent requests open: exit ${e ? e.code : "none"} after ${ms} ms`);
-  open.destroy(); open2.destroy();
+  // 4. SIGTERM with half-sent requests open.
+  figures.sigterm_exit_ms = await expectCleanExit(server, "SIGTERM");
+  open.destroy();
 } catch (e) {
   failures++;
   console.error(`FAIL: ${e.message}\nserve's log:\n${server.log()}`);
@@ -165,14 +154,7 @@ try {
   await expectStatus(g, "/api/pause", json("", { Authorization: "Bearer wrong" }), 401, "POST with a wrong token");
   await expectStatus(g, "/api/pause", json("", { Authorization: `Bearer ${secret}` }), 200, "POST with the token");
   await expectStatus(g, "/api/status", {}, 200, "GET needs no token");
-  const open = await halfSent(guarded.port);
-  const t = Date.now();
-  guarded.child.kill("SIGINT");
-  const e = await Promise.race([guarded.exited, sleep(10000).then(() => null)]);
-  const ms = e ? e.at - t : Infinity;
-  figures.sigint_exit_ms = ms;
-  check(e && e.code === 0 && ms <= 2000, `SIGINT with a half-sent request open: exit ${e ? e.code : "none"} after ${ms} ms`);
-  open.destroy();
+  figures.sigint_exit_ms = await expectCleanExit(guarded, "SIGINT");
 } catch (e) {
   failures++;
   console.error(`FAIL: ${e.message}\nserve's log:\n${guarded.log()}`);
