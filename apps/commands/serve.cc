@@ -102,6 +102,13 @@ int RunServe(int argc, char** argv) {
   app.add_option("--frames", options.max_frames,
                  "stop processing after N frames (0 = until the source ends); the page stays up")
       ->capture_default_str();
+  app.add_option("--record-dir", options.record_dir,
+                 "folder under which the page's record switch (POST /api/record) starts recordings "
+                 "of the raw pairs and results, replayable with --source images:")
+      ->capture_default_str();
+  app.add_option("--health-every", options.health_every_frames,
+                 "measure the calibration's health (row alignment) every N frames")
+      ->capture_default_str();
   app.add_option("--jpeg-quality", options.jpeg_quality, "quality of the images sent to the page")
       ->capture_default_str();
   return RunCommand(app, argc, argv, [&] {

@@ -7,6 +7,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/core/timer.h"
 
 namespace linesight {
 
@@ -83,12 +84,15 @@ RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
     }
   }
   RangingFrame frame;
+  Stopwatch watch;
   if (rectifier_) {
     rectifier_->Rectify(left, right, &frame.left_rectified, &frame.right_rectified);
   } else {
     frame.left_rectified = left;
     frame.right_rectified = right;
   }
+  frame.rectify_ms = watch.ElapsedMs();
+  watch.Restart();
   // Band: the requested rows plus a margin for the matcher's windows and path aggregation.
   constexpr int kBandMarginPx = 24;
   const cv::Range band = rows ? cv::Range(std::max(0, rows->start - kBandMarginPx),
@@ -121,6 +125,7 @@ RangingFrame RangingPipeline::Process(const cv::Mat& left, const cv::Mat& right,
   frame.disparity = unpad(matched.disparity);
   frame.checked_disparity =
       matched.IsSameMapAsDisparity() ? frame.disparity : unpad(matched.checked);
+  frame.match_ms = watch.ElapsedMs();
   return frame;
 }
 

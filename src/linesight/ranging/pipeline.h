@@ -88,6 +88,8 @@ struct RangingFrame {
   // (isgm: its SGM stage before plane filling), +inf elsewhere. The same Mat as `disparity` for the
   // other matchers.
   cv::Mat checked_disparity;
+  double rectify_ms = 0;  // wall-clock time Process spent rectifying
+  double match_ms = 0;    // and matching
   // What ranging uses: checked_disparity if RangingPipelineOptions::range_on_checked_disparity.
   const cv::Mat& ranging_disparity(bool checked) const {
     return checked ? checked_disparity : disparity;

@@ -43,6 +43,17 @@ double ParseAlarmRequest(const std::string& body) {
   return d;
 }
 
+bool ParseRecordRequest(const std::string& body) {
+  const nlohmann::json j = ParseObject(body, "{\"on\": bool}");
+  for (const auto& [key, value] : j.items()) {
+    if (key != "on") throw InputError(fmt::format("unknown field '{}' (expected 'on')", key));
+  }
+  if (!j.contains("on") || !j["on"].is_boolean()) {
+    throw InputError("'on' must be true (start a new recording) or false (stop it)");
+  }
+  return j["on"].get<bool>();
+}
+
 RoiRequest ParseRoiRequest(const std::string& body, cv::Size image) {
   nlohmann::json j = ParseObject(body, "{\"rois\": [...], \"auto\": bool}");
   RoiRequest request;

@@ -22,4 +22,7 @@ RoiRequest ParseRoiRequest(const std::string& body, cv::Size image);
 // What POST /api/alarm carries: {"distance_m": x} with 0.05 <= x <= 100. InputError otherwise.
 double ParseAlarmRequest(const std::string& body);
 
+// What POST /api/record carries: {"on": true|false}. InputError otherwise.
+bool ParseRecordRequest(const std::string& body);
+
 }  // namespace linesight

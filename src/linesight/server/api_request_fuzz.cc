@@ -26,5 +26,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!(d >= 0.05 && d <= 100)) std::abort();
   } catch (const linesight::InputError&) {
   }
+  try {
+    (void)linesight::ParseRecordRequest(body);
+  } catch (const linesight::InputError&) {
+  }
   return 0;
 }

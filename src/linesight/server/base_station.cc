@@ -11,9 +11,11 @@
 
 #include <fmt/format.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
 #include "linesight/core/timer.h"
+#include "linesight/io/annotate.h"
 #include "linesight/io/disparity_io.h"
 #include "linesight/server/web_page.h"
 
@@ -22,10 +24,15 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-std::vector<uint8_t> EncodeJpeg(const cv::Mat& image, int quality) {
-  std::vector<uint8_t> bytes;
-  cv::imencode(".jpg", image, bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+JpegBytes EncodeJpeg(const cv::Mat& image, int quality) {
+  auto bytes = std::make_shared<std::vector<uint8_t>>();
+  cv::imencode(".jpg", image, *bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
   return bytes;
+}
+
+// Exponential moving average over about five frames; the first value starts it.
+void Smooth(double* average, double value, bool first) {
+  *average = first ? value : 0.8 * *average + 0.2 * value;
 }
 
 nlohmann::json RectToJson(const cv::Rect& r) { return {r.x, r.y, r.width, r.height}; }
@@ -56,6 +63,16 @@ void BaseStationOptions::Check() const {
   CheckOption(max_fps >= 0, "BaseStationOptions.max_fps", max_fps, "must be >= 0 (0 = no cap)");
   CheckOption(max_frames >= 0, "BaseStationOptions.max_frames", max_frames,
               "must be >= 0 (0 = until the source ends)");
+  CheckOption(!record_dir.empty(), "BaseStationOptions.record_dir", record_dir,
+              "must name a folder");
+  CheckOption(health_every_frames >= 1, "BaseStationOptions.health_every_frames",
+              health_every_frames, "must be >= 1");
+  row_alignment.Check();
+}
+
+nlohmann::json StageTimes::ToJson() const {
+  return {{"grab", grab},     {"rectify", rectify}, {"match", match},    {"range", range},
+          {"health", health}, {"encode", encode},   {"latency", latency}};
 }
 
 BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
@@ -87,6 +104,7 @@ BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
     pipeline_options.params = LineMatcherParams(pipeline_options.method, pipeline_options.params);
   }
   pipeline_ = std::make_unique<RangingPipeline>(*calibration, pipeline_options);
+  calibration_ = *calibration;
   calibration_summary_ =
       fmt::format("{}x{}, rectified f {:.1f} px, baseline {:.1f} mm", image_size_.width,
                   image_size_.height, pipeline_->rectified_calibration().RectifiedFocal(),
@@ -142,6 +160,7 @@ void BaseStation::Loop() {
 }
 
 bool BaseStation::Step() {
+  Stopwatch grab_watch;
   std::optional<StereoFrame> frame;
   if (first_frame_) {
     frame = std::move(first_frame_);
@@ -150,6 +169,9 @@ bool BaseStation::Step() {
     frame = source_->Read();
   }
   if (!frame) return false;
+  StageTimes stages;
+  stages.grab = grab_watch.ElapsedMs();
+  Stopwatch in_hand;  // the latency runs from here to the publication
   if (frame->left.size() != image_size_) {
     throw InputError(fmt::format("source '{}': frame {} is {}x{}, the stream started at {}x{}",
                                  source_->Describe(), frame->index, frame->left.cols,
@@ -169,8 +191,10 @@ bool BaseStation::Step() {
   }
   const bool line_mode = automatic && options_.finder == AutoFinder::kLine;
 
-  Stopwatch watch;
   const RangingFrame ranged = pipeline_->Process(frame->left, frame->right);
+  stages.rectify = ranged.rectify_ms;
+  stages.match = ranged.match_ms;
+  Stopwatch watch;
   std::vector<RangeResult> results = pipeline_->RangeRois(ranged, rois);
   const size_t num_roi = results.size();
   if (automatic && !line_mode) {
@@ -182,7 +206,17 @@ bool BaseStation::Step() {
                                 conductor_.ok() ? &conductor_ : nullptr);
     conductor_ = on_line.conductor;
   }
-  const double process_ms = watch.ElapsedMs();
+  stages.range = watch.ElapsedMs();
+  const double process_ms = stages.rectify + stages.match + stages.range;
+
+  // Calibration health, on the first frame and every health_every_frames after it.
+  std::optional<RowAlignment> health;
+  if (frames_processed_ % options_.health_every_frames == 0) {
+    watch.Restart();
+    health =
+        MeasureRowAlignment(ranged.left_rectified, ranged.right_rectified, options_.row_alignment);
+    stages.health = watch.ElapsedMs();
+  }
 
   std::vector<DistanceMeasurement> measurements;
   nlohmann::json measured = nlohmann::json::array();
@@ -202,70 +236,162 @@ bool BaseStation::Step() {
     }
   }
 
+  nlohmann::json result;
+  {
+    std::lock_guard lock(mutex_);
+    const std::vector<TrackState> tracks = tracker_.Update(frame->timestamp_s, measurements);
+    nlohmann::json tracked = nlohmann::json::array();
+    int tentative = 0;
+    for (const TrackState& t : tracks) {
+      // Reported: confirmed tracks measured in this frame, and every ROI track. An automatic track
+      // that missed this frame coasts (for re-association) but is not shown: its predicted sigma
+      // grows with every frame it is not seen.
+      if (t.confirmed && (t.missed == 0 || t.key != "auto")) {
+        tracked.push_back(t.ToJson());
+      } else {
+        ++tentative;
+      }
+    }
+    result = {{"frame", frame->index},
+              {"timestamp_s", frame->timestamp_s},
+              {"process_ms", process_ms},
+              {"measurements", measured},
+              {"tracks", tracked},
+              {"tentative_tracks", tentative},
+              {"distance_definition",
+               "depth of the obstacle's nearest visible surface along the rectified left "
+               "optical axis (m)"}};
+    if (line_mode) {
+      // The line tracker runs under the lock: a settings change resets it from another thread.
+      const std::vector<LineTrack> line_tracks =
+          line_tracker_.Update(frame->timestamp_s, on_line.obstacles);
+      nlohmann::json list = nlohmann::json::array();
+      for (const LineTrack& t : line_tracks) list.push_back(t.ToJson());
+      nlohmann::json found = on_line.ToJson();
+      const bool alarm = !line_tracks.empty() && line_tracks.front().arc_m <= alarm_distance_m_;
+      result["line"] = {
+          {"conductor", found["conductor"]},
+          {"obstacles", found["obstacles"]},
+          {"tracks", list},
+          {"alarm_distance_m", alarm_distance_m_},
+          {"alarm", alarm},
+          {"distance_definition",
+           "arc_m: distance along the conductor from the robot to the obstacle's near "
+           "end (m); distance_m: depth of its nearest visible surface (m)"}};
+    }
+  }
+
   // Colour map of the working range only (farther = black), scaled to what is in view.
+  watch.Restart();
   const DisparityRange range = pipeline_->disparity_range();
   cv::Mat in_range = ranged.disparity.clone();
   in_range.setTo(std::numeric_limits<float>::infinity(),
                  (in_range < range.min_disparity) | (in_range > range.max_disparity()));
-  const cv::Mat colour = ColorizeDisparity(in_range);
-  std::vector<uint8_t> left_jpeg = EncodeJpeg(ranged.left_rectified, options_.jpeg_quality);
-  std::vector<uint8_t> disparity_jpeg = EncodeJpeg(colour, options_.jpeg_quality);
+  JpegBytes left_jpeg = EncodeJpeg(ranged.left_rectified, options_.jpeg_quality);
+  JpegBytes disparity_jpeg = EncodeJpeg(ColorizeDisparity(in_range), options_.jpeg_quality);
+  JpegBytes annotated_jpeg =
+      annotated_viewers_.load() > 0 ? DrawAnnotated(ranged.left_rectified, result) : nullptr;
+  stages.encode = watch.ElapsedMs();
 
-  std::lock_guard lock(mutex_);
-  const std::vector<TrackState> tracks = tracker_.Update(frame->timestamp_s, measurements);
-  nlohmann::json tracked = nlohmann::json::array();
-  int tentative = 0;
-  for (const TrackState& t : tracks) {
-    // Reported: confirmed tracks measured in this frame, and every ROI track. An automatic track
-    // that missed this frame coasts (for re-association) but is not shown: its predicted sigma
-    // grows with every frame it is not seen.
-    if (t.confirmed && (t.missed == 0 || t.key != "auto")) {
-      tracked.push_back(t.ToJson());
-    } else {
-      ++tentative;
+  {
+    std::lock_guard lock(mutex_);
+    const Clock::time_point now = Clock::now();
+    if (last_publish_) {
+      const double seconds = std::chrono::duration<double>(now - *last_publish_).count();
+      if (seconds > 0) Smooth(&fps_, 1.0 / seconds, fps_ == 0);
     }
+    last_publish_ = now;
+    if (health) {
+      health_ = *health;
+      health_frame_ = frame->index;
+      if (health->verdict != RowAlignment::Verdict::kNoVerdict) {
+        health_history_.emplace_back(frame->index, health->median_abs_offset_px);
+        if (health_history_.size() > 60) health_history_.pop_front();
+      }
+    }
+    stages.latency = in_hand.ElapsedMs();
+    const bool first = frames_processed_ == 0;
+    for (auto [average, value] : {std::pair{&stage_average_.grab, stages.grab},
+                                  {&stage_average_.rectify, stages.rectify},
+                                  {&stage_average_.match, stages.match},
+                                  {&stage_average_.range, stages.range},
+                                  {&stage_average_.health, stages.health},
+                                  {&stage_average_.encode, stages.encode},
+                                  {&stage_average_.latency, stages.latency}}) {
+      Smooth(average, value, first);
+    }
+    ++frames_processed_;
+    result["stages_ms"] = stages.ToJson();
+    snapshot_.frame_index = frame->index;
+    snapshot_.timestamp_s = frame->timestamp_s;
+    snapshot_.process_ms = process_ms;
+    snapshot_.fps = fps_;
+    snapshot_.stages = stages;
+    snapshot_.left_jpeg = std::move(left_jpeg);
+    snapshot_.disparity_jpeg = std::move(disparity_jpeg);
+    snapshot_.annotated_jpeg = std::move(annotated_jpeg);
+    snapshot_.result = result;
   }
-  if (last_publish_s_ >= 0 && frame->timestamp_s > last_publish_s_) {
-    const double instant = 1.0 / (frame->timestamp_s - last_publish_s_);
-    fps_ = fps_ > 0 ? 0.8 * fps_ + 0.2 * instant : instant;
-  }
-  last_publish_s_ = frame->timestamp_s;
-  snapshot_.frame_index = frame->index;
-  snapshot_.timestamp_s = frame->timestamp_s;
-  snapshot_.process_ms = process_ms;
-  snapshot_.fps = fps_;
-  snapshot_.left_jpeg = std::move(left_jpeg);
-  snapshot_.disparity_jpeg = std::move(disparity_jpeg);
-  nlohmann::json line_json;
-  if (line_mode) {
-    // The line tracker runs under the lock: a settings change resets it from another thread.
-    const std::vector<LineTrack> line_tracks =
-        line_tracker_.Update(frame->timestamp_s, on_line.obstacles);
-    nlohmann::json list = nlohmann::json::array();
-    for (const LineTrack& t : line_tracks) list.push_back(t.ToJson());
-    nlohmann::json found = on_line.ToJson();
-    const bool alarm = !line_tracks.empty() && line_tracks.front().arc_m <= alarm_distance_m_;
-    line_json = {{"conductor", found["conductor"]},
-                 {"obstacles", found["obstacles"]},
-                 {"tracks", list},
-                 {"alarm_distance_m", alarm_distance_m_},
-                 {"alarm", alarm},
-                 {"distance_definition",
-                  "arc_m: distance along the conductor from the robot to the obstacle's near end "
-                  "(m); distance_m: depth of its nearest visible surface (m)"}};
-  }
-  snapshot_.result = {{"frame", frame->index},
-                      {"timestamp_s", frame->timestamp_s},
-                      {"process_ms", process_ms},
-                      {"measurements", measured},
-                      {"tracks", tracked},
-                      {"tentative_tracks", tentative},
-                      {"distance_definition",
-                       "depth of the obstacle's nearest visible surface along the rectified left "
-                       "optical axis (m)"}};
-  if (line_mode) snapshot_.result["line"] = std::move(line_json);
   published_.notify_all();
+  recorder_.Add(frame->left, frame->right, result);
   return true;
+}
+
+JpegBytes BaseStation::DrawAnnotated(const cv::Mat& left_rectified,
+                                     const nlohmann::json& result) const {
+  cv::Mat view;
+  if (left_rectified.channels() == 1) {
+    cv::cvtColor(left_rectified, view, cv::COLOR_GRAY2BGR);
+  } else {
+    view = left_rectified.clone();
+  }
+  const auto box_of = [](const nlohmann::json& b) {
+    return cv::Rect(b[0].get<int>(), b[1].get<int>(), b[2].get<int>(), b[3].get<int>());
+  };
+  if (result.contains("line")) {
+    const nlohmann::json& line = result["line"];
+    const nlohmann::json& conductor = line["conductor"];
+    std::vector<std::pair<const nlohmann::json*, cv::Scalar>> curves;
+    if (conductor.contains("others")) {
+      for (const nlohmann::json& other : conductor["others"]) {
+        curves.emplace_back(&other, cv::Scalar(255, 200, 120));
+      }
+    }
+    if (conductor.contains("line") && !conductor["line"].is_null()) {
+      curves.emplace_back(&conductor["line"], cv::Scalar(255, 224, 88));
+    }
+    for (const auto& [curve, colour] : curves) {
+      std::vector<cv::Point> points;
+      for (const nlohmann::json& p : (*curve)["image_uvd"]) {
+        points.emplace_back(cvRound(p[0].get<double>()), cvRound(p[1].get<double>()));
+      }
+      cv::polylines(view, points, false, colour, 2, cv::LINE_AA);
+    }
+    const bool alarm = line["alarm"].get<bool>();
+    std::vector<cv::Rect> boxes;
+    std::vector<std::string> labels;
+    for (const nlohmann::json& t : line["tracks"]) {
+      boxes.push_back(box_of(t["box"]));
+      labels.push_back(fmt::format("#{} {} {:.2f} m", t["id"].get<int>(),
+                                   t["type"].get<std::string>(), t["arc_m"].get<double>()));
+    }
+    if (alarm && !boxes.empty()) {
+      DrawLabelledBoxes(view, {boxes.front()}, {"ALARM " + labels.front()},
+                        cv::Scalar(73, 81, 248));
+      boxes.erase(boxes.begin());
+      labels.erase(labels.begin());
+    }
+    DrawLabelledBoxes(view, boxes, labels, cv::Scalar(41, 180, 240));
+  }
+  std::vector<cv::Rect> boxes;
+  std::vector<std::string> labels;
+  for (const nlohmann::json& t : result["tracks"]) {
+    boxes.push_back(box_of(t["box"]));
+    labels.push_back(
+        fmt::format("#{} {:.2f} m", t["id"].get<int>(), t["distance_m"].get<double>()));
+  }
+  DrawLabelledBoxes(view, boxes, labels, cv::Scalar(255, 255, 255));
+  return EncodeJpeg(view, options_.jpeg_quality);
 }
 
 int64_t BaseStation::WaitForFrame(int64_t after, double timeout_s) const {
@@ -286,6 +412,21 @@ nlohmann::json BaseStation::Status() const {
   for (const cv::Rect& r : rois_) rois.push_back(RectToJson(r));
   const DisparityRange range = pipeline_->disparity_range();
   const DisparityRange searched = pipeline_->search_range();
+  // Stale: the source should be delivering (running, not paused) but the newest result is older
+  // than five frame periods, and at least 2 s (a slow rig's normal gap is not an alarm).
+  double age_s = -1;
+  bool stale = false;
+  if (last_publish_) {
+    age_s = std::chrono::duration<double>(Clock::now() - *last_publish_).count();
+    const double allowed = std::max(2.0, fps_ > 0 ? 5.0 / fps_ : 0.0);
+    stale = running_.load() && !paused_ && age_s > allowed;
+  }
+  nlohmann::json calibration_health = health_.ToJson();
+  calibration_health["frame"] = health_frame_;
+  calibration_health["every_frames"] = options_.health_every_frames;
+  nlohmann::json history = nlohmann::json::array();
+  for (const auto& [frame, offset] : health_history_) history.push_back({frame, offset});
+  calibration_health["history"] = history;
   return {{"source", source_->Describe()},
           {"live", source_->IsLive()},
           {"calibration", calibration_summary_},
@@ -297,13 +438,19 @@ nlohmann::json BaseStation::Status() const {
           {"frame", snapshot_.frame_index},
           {"fps", snapshot_.fps},
           {"process_ms", snapshot_.process_ms},
+          {"stages_ms", stage_average_.ToJson()},
+          {"latency_ms", stage_average_.latency},
+          {"age_s", age_s},
+          {"stale", stale},
           {"running", running_.load()},
           {"paused", paused_},
           {"error", error_},
           {"rois", rois},
           {"auto", auto_detect_},
           {"finder", AutoFinderName(options_.finder)},
-          {"alarm_distance_m", alarm_distance_m_}};
+          {"alarm_distance_m", alarm_distance_m_},
+          {"calibration_health", calibration_health},
+          {"recording", recorder_.Status()}};
 }
 
 void BaseStation::SetAlarmDistance(double distance_m) {
@@ -324,6 +471,14 @@ void BaseStation::SetPaused(bool paused) {
   std::lock_guard lock(mutex_);
   paused_ = paused;
   published_.notify_all();
+}
+
+void BaseStation::SetRecording(bool on) {
+  if (on) {
+    recorder_.Start(options_.record_dir, calibration_);
+  } else {
+    recorder_.Stop();
+  }
 }
 
 std::string BaseStation::error() const {
@@ -354,13 +509,80 @@ void SendError(httplib::Response& res, int status, const std::string& message) {
   SendJson(res, {{"error", message}}, status);
 }
 
-void SendJpeg(httplib::Response& res, const std::vector<uint8_t>& bytes) {
-  if (bytes.empty()) {
+void SendJpeg(httplib::Response& res, const JpegBytes& bytes) {
+  if (!bytes || bytes->empty()) {
     SendError(res, 503, "no frame has been processed yet");
     return;
   }
   res.set_header("Cache-Control", "no-store");
-  res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(), "image/jpeg");
+  res.set_content(reinterpret_cast<const char*>(bytes->data()), bytes->size(), "image/jpeg");
+}
+
+// How long a stream's writer waits for the next frame before it looks again (a heartbeat, a
+// closed client, a server that stops): bounds the exit after Stop().
+constexpr double kStreamWaitS = 0.5;
+
+// The server-sent event stream: "frame" for every published frame, "status" once a second
+// while none is.
+void StreamEvents(BaseStation* station, httplib::Response& res) {
+  res.set_header("Cache-Control", "no-store");
+  res.set_header("X-Accel-Buffering", "no");
+  auto last = std::make_shared<int64_t>(-2);
+  auto quiet_since = std::make_shared<Clock::time_point>(Clock::now());
+  res.set_chunked_content_provider("text/event-stream", [station, last, quiet_since](
+                                                            size_t, httplib::DataSink& sink) {
+    std::string message;
+    if (*last == -2) {  // first: the state as it is, so that a client draws at once
+      message = fmt::format("retry: 1000\nevent: status\ndata: {}\n\n", station->Status().dump());
+      *last = -1;
+    }
+    const int64_t frame = station->WaitForFrame(*last, kStreamWaitS);
+    if (frame > *last) {
+      const BaseStationSnapshot snap = station->Snapshot();
+      *last = snap.frame_index;
+      *quiet_since = Clock::now();
+      message += fmt::format(
+          "event: frame\ndata: {}\n\n",
+          nlohmann::json{{"status", station->Status()}, {"result", snap.result}}.dump());
+    } else if (Clock::now() - *quiet_since > std::chrono::seconds(1)) {
+      *quiet_since = Clock::now();
+      message += fmt::format("event: status\ndata: {}\n\n", station->Status().dump());
+    }
+    if (message.empty()) return sink.is_writable();
+    return sink.write(message.data(), message.size());
+  });
+}
+
+// The MJPEG stream of one view: a multipart/x-mixed-replace part per frame.
+void StreamJpegs(BaseStation* station, const std::string& view, httplib::Response& res) {
+  const bool annotated = view == "annotated";
+  const auto pick = [view](const BaseStationSnapshot& snap) {
+    return view == "left"        ? snap.left_jpeg
+           : view == "disparity" ? snap.disparity_jpeg
+                                 : snap.annotated_jpeg;
+  };
+  if (annotated) station->AddAnnotatedViewer(1);
+  res.set_header("Cache-Control", "no-store");
+  auto last = std::make_shared<int64_t>(-1);
+  res.set_chunked_content_provider(
+      "multipart/x-mixed-replace; boundary=linesightframe",
+      [station, last, pick](size_t, httplib::DataSink& sink) {
+        const int64_t frame = station->WaitForFrame(*last, kStreamWaitS);
+        if (frame <= *last) return sink.is_writable();
+        const BaseStationSnapshot snap = station->Snapshot();
+        *last = snap.frame_index;
+        const JpegBytes jpeg = pick(snap);
+        if (!jpeg) return sink.is_writable();  // drawn from the next frame on
+        const std::string head = fmt::format(
+            "--linesightframe\r\nContent-Type: image/jpeg\r\nContent-Length: {}\r\n\r\n",
+            jpeg->size());
+        return sink.write(head.data(), head.size()) &&
+               sink.write(reinterpret_cast<const char*>(jpeg->data()), jpeg->size()) &&
+               sink.write("\r\n", 2);
+      },
+      [station, annotated](bool) {
+        if (annotated) station->AddAnnotatedViewer(-1);
+      });
 }
 
 }  // namespace
@@ -455,6 +677,17 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     }
     SendJson(res, snap.result);
   });
+  get("/api/events",
+      [station](const httplib::Request&, httplib::Response& res) { StreamEvents(station, res); });
+  get("/api/stream.mjpeg", [station](const httplib::Request& req, httplib::Response& res) {
+    const std::string view = req.has_param("view") ? req.get_param_value("view") : "annotated";
+    if (view != "annotated" && view != "left" && view != "disparity") {
+      SendError(res, 400,
+                fmt::format("'view' must be annotated, left or disparity, got '{}'", view));
+      return;
+    }
+    StreamJpegs(station, view, res);
+  });
   get("/api/frame/left.jpg", [station](const httplib::Request&, httplib::Response& res) {
     SendJpeg(res, station->Snapshot().left_jpeg);
   });
@@ -475,6 +708,22 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
       station->SetAlarmDistance(ParseAlarmRequest(req.body));
     } catch (const InputError& e) {
       SendError(res, 400, e.what());
+      return;
+    }
+    SendJson(res, station->Status());
+  });
+  post("/api/record", [station](const httplib::Request& req, httplib::Response& res) {
+    bool on = false;
+    try {
+      on = ParseRecordRequest(req.body);
+    } catch (const InputError& e) {
+      SendError(res, 400, e.what());
+      return;
+    }
+    try {
+      station->SetRecording(on);
+    } catch (const InputError& e) {  // the robot's disk, not the request: a server error
+      SendError(res, 500, e.what());
       return;
     }
     SendJson(res, station->Status());

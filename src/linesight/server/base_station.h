@@ -15,11 +15,25 @@
 //                             in line mode "line": the conductor (status, image curve), this
 //                             frame's obstacles, the tracks nearest along the line first, the
 //                             alarm distance and whether the nearest track is within it
+//   GET  /api/events          server-sent events: "frame" {"status", "result"} for every
+//                             published frame, "status" once a second while none is (so a
+//                             client sees a stale, paused or ended source)
 //   GET  /api/frame/left.jpg  newest rectified left image (JPEG)
 //   GET  /api/frame/disparity.jpg  its disparity, colour-mapped (JPEG)
+//   GET  /api/stream.mjpeg    MJPEG stream (multipart/x-mixed-replace) of every frame:
+//                             ?view=annotated (default: conductor, obstacles, ROIs drawn), left,
+//                             disparity; plays in a browser, VLC or ffplay
 //   POST /api/rois            {"rois": [[x, y, w, h], ...], "auto": true|false}: set what is ranged
 //   POST /api/alarm           {"distance_m": x}: the alarm distance along the line (m)
+//   POST /api/record          {"on": true|false}: start a new recording of raw pairs and results
+//                             under the server's record folder (server/recorder.h), or stop it
 //   POST /api/pause, /api/resume
+//
+// /api/status reports per-stage timing (grab, rectify, match, range, health, encode; moving
+// averages, ms), the end-to-end latency from a frame in hand to its result published, the age of
+// the newest result and "stale" when it is older than 5 frame periods (at least 2 s) while the
+// source should be delivering, the calibration's health (row alignment of the rectified pair,
+// rectify/row_alignment.h, with its recent history) and the recording's state.
 //
 // Every API error answers 4xx with {"error": "<what is wrong>"}: 404 for an unknown path, 405 (with
 // Allow) for a known path with the wrong method, 415 for a POST whose Content-Type is not
@@ -29,8 +43,10 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -45,8 +61,10 @@
 #include "linesight/line/line_obstacles.h"
 #include "linesight/line/line_tracker.h"
 #include "linesight/ranging/pipeline.h"
+#include "linesight/rectify/row_alignment.h"
 #include "linesight/server/api_request.h"
 #include "linesight/server/distance_tracker.h"
+#include "linesight/server/recorder.h"
 
 namespace linesight {
 
@@ -74,18 +92,43 @@ struct BaseStationOptions {
   int jpeg_quality = 85;   // 1..100
   double max_fps = 0;      // processing rate cap (0 = as fast as possible)
   int64_t max_frames = 0;  // stop after this many frames (0 = until the source ends)
+  // Folder under which POST /api/record starts recordings; set on the server's command line only
+  // (a client cannot choose where the robot writes).
+  std::string record_dir = "recordings";
+  // Calibration health: the rectified pair's row alignment is measured on the first frame and then
+  // every this many frames (>= 1; about 5 ms each on a 752x480 pair).
+  int health_every_frames = 30;
+  RowAlignmentOptions row_alignment;
 
   void Check() const;
 };
+
+// Wall-clock time of each stage of one frame (ms).
+struct StageTimes {
+  double grab = 0;     // waiting for and reading the pair from the source
+  double rectify = 0;  // rectification
+  double match = 0;    // dense matching
+  double range = 0;    // ROIs, automatic finding, the conductor and its obstacles
+  double health = 0;   // the calibration-health measure (on the frames that take it)
+  double encode = 0;   // colour map and JPEG encoding for the page
+  double latency = 0;  // from the pair in hand to its result published (everything but grab)
+
+  nlohmann::json ToJson() const;
+};
+
+using JpegBytes = std::shared_ptr<const std::vector<uint8_t>>;
 
 // The newest published result.
 struct BaseStationSnapshot {
   int64_t frame_index = -1;  // -1 until the first frame is processed
   double timestamp_s = 0;
   double process_ms = 0;  // rectify + match + range of this frame
-  double fps = 0;         // processed frames per second (moving average)
-  std::vector<uint8_t> left_jpeg, disparity_jpeg;
-  nlohmann::json result;  // measurements and tracks of this frame
+  double fps = 0;         // processed frames per second (moving average, wall clock)
+  StageTimes stages;      // this frame's
+  // Shared, never changed once published: readers keep them without copying.
+  JpegBytes left_jpeg, disparity_jpeg;
+  JpegBytes annotated_jpeg;  // only while an annotated stream has a viewer (else null)
+  nlohmann::json result;     // measurements and tracks of this frame
 };
 
 class BaseStation {
@@ -117,18 +160,29 @@ class BaseStation {
   void SetRois(const RoiRequest& request);
   void SetAlarmDistance(double distance_m);  // OptionError outside 0.05..100 m
   void SetPaused(bool paused);
+  // Starts (a new folder under BaseStationOptions::record_dir) or stops recording; throws
+  // InputError when the folder cannot be created.
+  void SetRecording(bool on);
+  // Viewers of the annotated stream: the loop draws and encodes the annotated view only while
+  // there is one.
+  void AddAnnotatedViewer(int delta) { annotated_viewers_ += delta; }
   bool running() const { return running_.load(); }
   // The error that ended the loop (a camera that stopped), empty otherwise.
   std::string error() const;
   cv::Size image_size() const { return image_size_; }
 
  private:
+  using Clock = std::chrono::steady_clock;
   void Loop();
+  JpegBytes DrawAnnotated(const cv::Mat& left_rectified, const nlohmann::json& result) const;
 
   std::unique_ptr<FrameSource> source_;
   BaseStationOptions options_;
   std::unique_ptr<RangingPipeline> pipeline_;
+  StereoCalibration calibration_;  // as given (what a recording replays with)
   std::string calibration_summary_;
+  Recorder recorder_;
+  std::atomic<int> annotated_viewers_{0};
   cv::Size image_size_;
   std::optional<StereoFrame> first_frame_;
 
@@ -145,7 +199,12 @@ class BaseStation {
   ConductorModel conductor_;  // the last frame's, seeds the next fit
   double alarm_distance_m_ = 1.0;
   double fps_ = 0;
-  double last_publish_s_ = -1;
+  std::optional<Clock::time_point> last_publish_;
+  StageTimes stage_average_;  // moving averages
+  int64_t frames_processed_ = 0;
+  RowAlignment health_;
+  int64_t health_frame_ = -1;
+  std::deque<std::pair<int64_t, double>> health_history_;  // (frame, median |row offset| px)
 
   std::atomic<bool> running_{false};
   std::atomic<bool> stop_{false};
@@ -159,7 +218,8 @@ struct BaseStationServerOptions {
   // Seconds a connection may stall mid-request, or idle between keep-alive requests, before it is
   // closed: bounds how long a half-sent request holds a worker, and so the exit after Stop().
   int io_timeout_s = 1;
-  int workers = 32;  // concurrent connections served (each poller holds one)
+  // Concurrent connections served: each event or video stream, and each poller, holds one.
+  int workers = 64;
 
   void Check() const;
 };

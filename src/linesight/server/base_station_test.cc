@@ -6,6 +6,8 @@
 #include <string>
 #include <thread>
 
+#include <filesystem>
+
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -220,7 +222,7 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   ASSERT_TRUE(page);
   EXPECT_EQ(page->status, 200);
   EXPECT_NE(page->body.find("linesight base station"), std::string::npos);
-  EXPECT_NE(page->body.find("/api/result"), std::string::npos);
+  EXPECT_NE(page->body.find("/api/events"), std::string::npos);
 
   auto set = client.Post("/api/rois", R"({"rois": [[300, 150, 60, 60]], "auto": false})",
                          "application/json");
@@ -241,6 +243,123 @@ TEST(BaseStation, ServesTheSyntheticSceneOverHttp) {
   ASSERT_TRUE(missing);
   EXPECT_EQ(missing->status, 404);
   EXPECT_NE(missing->body.find("no such resource"), std::string::npos);
+}
+
+// Push and record: every published frame reaches an event-stream client as a "frame" event with
+// the status and the result, the annotated MJPEG stream delivers decodable JPEG parts, the status
+// carries per-stage timing and the calibration's health, and the record switch writes a recording
+// that the images: source reads back, pair for pair.
+TEST(BaseStation, PushesEventsStreamsTheAnnotatedViewAndRecords) {
+  namespace fs = std::filesystem;
+  FrameSourceOptions source_options;
+  source_options.synthetic_supersampling = 1;
+  source_options.synthetic_obstacles = "damper:2";
+  BaseStationOptions options;
+  options.pipeline.min_depth_m = 1.0;
+  options.pipeline.max_depth_m = 6.0;
+  options.max_frames = 4;
+  options.health_every_frames = 1;
+  options.rois = {cv::Rect(300, 150, 60, 60)};
+  options.record_dir = ::testing::TempDir() + "/bs_recordings";
+  fs::remove_all(options.record_dir);
+  BaseStation station(OpenFrameSource("synthetic:1", source_options), std::nullopt, options);
+  LoopbackServer server(&station);
+
+  auto bad = server.client.Post("/api/record", R"({"on": "yes"})", "application/json");
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+  auto record = server.client.Post("/api/record", R"({"on": true})", "application/json");
+  ASSERT_TRUE(record);
+  ASSERT_EQ(record->status, 200) << record->body;
+  EXPECT_EQ(nlohmann::json::parse(record->body)["recording"]["on"], true);
+
+  // Clients that read the streams until they have what they need (bounded by the frame count).
+  std::string events, video;
+  std::thread event_reader([&] {
+    httplib::Client c("127.0.0.1", server.port);
+    c.set_read_timeout(60, 0);
+    c.Get("/api/events", [&](const char* data, size_t size) {
+      events.append(data, size);
+      size_t frames = 0;
+      for (size_t at = events.find("event: frame"); at != std::string::npos;
+           at = events.find("event: frame", at + 1)) {
+        frames += events.find("\n\n", at) != std::string::npos;  // complete events only
+      }
+      return frames < 4;
+    });
+  });
+  std::thread video_reader([&] {
+    httplib::Client c("127.0.0.1", server.port);
+    c.set_read_timeout(60, 0);
+    c.Get("/api/stream.mjpeg", [&](const char* data, size_t size) {
+      video.append(data, size);
+      return video.find("--linesightframe", video.find("--linesightframe") + 1) ==
+             std::string::npos;  // until a second part begins: the first is complete
+    });
+  });
+  // Both viewers are connected before the first frame (the annotated view is drawn for viewers).
+  for (int i = 0; i < 100 && station.Status()["frame"] == -1; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  station.Start();
+  event_reader.join();
+  video_reader.join();
+  while (station.running()) station.WaitForFrame(station.Snapshot().frame_index, 1.0);
+  EXPECT_EQ(station.error(), "");
+
+  // The event stream: a status event first, then one frame event per frame, in order.
+  EXPECT_EQ(events.rfind("retry: 1000\nevent: status\ndata: {", 0), 0u) << events.substr(0, 80);
+  int64_t expected_frame = 0;
+  for (size_t at = events.find("event: frame\ndata: "); at != std::string::npos;
+       at = events.find("event: frame\ndata: ", at + 1)) {
+    const size_t start = at + std::string("event: frame\ndata: ").size();
+    const auto j = nlohmann::json::parse(events.substr(start, events.find('\n', start) - start));
+    EXPECT_EQ(j["result"]["frame"], expected_frame++);
+    EXPECT_TRUE(j["status"].contains("stages_ms"));
+    EXPECT_GT(j["result"]["stages_ms"]["match"].get<double>(), 0);
+  }
+  EXPECT_EQ(expected_frame, 4);
+
+  // The video: a multipart JPEG part of the annotated view.
+  const std::string head = "Content-Type: image/jpeg\r\nContent-Length: ";
+  const size_t at = video.find(head);
+  ASSERT_NE(at, std::string::npos) << video.substr(0, 200);
+  const size_t length = std::stoul(video.substr(at + head.size()));
+  const size_t body = video.find("\r\n\r\n", at) + 4;
+  ASSERT_LE(body + length, video.size());
+  const cv::Mat frame = cv::imdecode(
+      std::vector<uint8_t>(video.begin() + long(body), video.begin() + long(body + length)),
+      cv::IMREAD_COLOR);
+  EXPECT_EQ(frame.size(), cv::Size(752, 480));
+  auto wrong_view = server.client.Get("/api/stream.mjpeg?view=depth");
+  ASSERT_TRUE(wrong_view);
+  EXPECT_EQ(wrong_view->status, 400);
+
+  // Status: stage timing, the calibration's health (the true calibration: rows aligned).
+  const nlohmann::json status = station.Status();
+  for (const char* stage : {"grab", "rectify", "match", "range", "health", "encode", "latency"}) {
+    EXPECT_TRUE(status["stages_ms"].contains(stage)) << stage;
+  }
+  EXPECT_GT(status["latency_ms"].get<double>(), status["stages_ms"]["match"].get<double>() * 0.5);
+  EXPECT_EQ(status["stale"], false);
+  EXPECT_EQ(status["calibration_health"]["verdict"], "good") << status["calibration_health"];
+  EXPECT_LT(status["calibration_health"]["median_abs_row_offset_px"].get<double>(), 0.3);
+  EXPECT_EQ(status["calibration_health"]["history"].size(), 4u);
+
+  // The recording: four pairs and result lines, replayable through the images: source.
+  auto stop = server.client.Post("/api/record", R"({"on": false})", "application/json");
+  ASSERT_TRUE(stop);
+  const auto recording = nlohmann::json::parse(stop->body)["recording"];
+  EXPECT_EQ(recording["on"], false);
+  EXPECT_EQ(recording["frames"], 4);
+  const std::string dir = recording["dir"];
+  const auto replay = OpenFrameSource("images:" + dir + "/left/*.png," + dir + "/right/*.png");
+  int replayed = 0;
+  while (replay->Read()) ++replayed;
+  EXPECT_EQ(replayed, 4);
+  EXPECT_NO_THROW(ReadStereoCalibration(dir + "/stereo.yml"));
+  fs::remove_all(options.record_dir);
 }
 
 // The base station on the moving synthetic sequence (tuning seed 3, the robot 2 m from the first

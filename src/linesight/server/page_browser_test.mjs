@@ -3,8 +3,11 @@
 //
 //   node page_browser_test.mjs --linesight BIN --out DIR
 //
-// Checks: the page loads without console errors; the images and the table update; pause holds
-// the frame and resume moves on; the automatic-finding switch turns finding off and on; a box
+// Checks: the page loads without console errors; results arrive pushed (server-sent events) and
+// the page shows every frame the pipeline publishes (its frame rate is the pipeline's); the badge
+// says LIVE, the stage timings and the calibration's health are shown; the images and the table
+// update; the record switch writes the raw pairs and a result line per frame; pause holds the
+// frame and resume moves on; the automatic-finding switch turns finding off and on; a box
 // dragged on the nearest obstacle ranges it within 2 % of its true straight distance; when the
 // run ends, the nearest obstacle shown on the line is the scene's nearest, of its type, within
 // 2 % of its true distance along the line, and nothing else is listed that is not an obstacle of
@@ -63,8 +66,9 @@ const render = spawnSync(linesight, ["render", "--sequence", String(FRAMES), "--
 if (render.status !== 0) throw new Error(`render failed: ${render.stderr}`);
 const truth = fs.readFileSync(path.join(truthDir, "truth.jsonl"), "utf8").trim().split("\n").map((l) => JSON.parse(l));
 
+const recordDir = path.join(out, "recordings");
 const server = await startServe(linesight, ["--source", `synthetic:${SEED}`, "--synthetic-start", String(START_M),
-  "--frames", String(FRAMES), "--threads", "1"]);
+  "--frames", String(FRAMES), "--threads", "1", "--record-dir", recordDir, "--health-every", "10"]);
 const base = server.base;
 const api = async (p) => (await fetch(base + p)).json();
 
@@ -96,7 +100,38 @@ try {
     document.querySelectorAll("#line-tracks tr td:nth-child(2)").length > 0 &&
     !document.getElementById("line-tracks").textContent.includes("nothing")), 60000);
   check(true, "the line table lists an obstacle");
+  check((await page.textContent("#badge")) === "LIVE", "the badge says LIVE");
+  const timing = await page.textContent("#timing");
+  check(/match \d+ · range \d+ · encode \d+ ms · latency \d+ ms/.test(timing), `stage timings shown ("${timing}")`);
+  const health = await page.textContent("#health");
+  check(/^health: good · row offset median 0\.\d\d px/.test(health), `the calibration's health is shown ("${health}")`);
+
+  // The page shows every frame the pipeline publishes (pushed, none skipped).
+  const counted = async () => ({ page: await page.evaluate(() => Number(document.body.dataset.framesShown || 0)),
+    server: (await api("/api/status")).frame });
+  const c0 = await counted();
+  await until("five more frames", async () => (await counted()).server >= c0.server + 5, 60000);
+  await sleep(300);
+  const c1 = await counted();
+  const pageFrames = c1.page - c0.page, serverFrames = c1.server - c0.server;
+  check(pageFrames >= 0.9 * serverFrames, `the page showed ${pageFrames} of the pipeline's ${serverFrames} frames`);
   await page.screenshot({ path: path.join(out, "page-running.png"), fullPage: true });
+
+  // The record switch.
+  await page.click("#record");
+  const rec = await until("a recording with 2 frames", async () => {
+    const r = (await api("/api/status")).recording;
+    return r.on && r.frames >= 2 ? r : null;
+  }, 30000);
+  await page.click("#record");
+  const stopped = await until("the recording stopped", async () => {
+    const r = (await api("/api/status")).recording;
+    return !r.on ? r : null;
+  }, 10000);
+  const pngs = (side) => fs.readdirSync(path.join(rec.dir, side)).filter((f) => f.endsWith(".png")).length;
+  const lines = fs.readFileSync(path.join(rec.dir, "results.jsonl"), "utf8").trim().split("\n").length;
+  check(stopped.frames >= 2 && pngs("left") === stopped.frames && pngs("right") === stopped.frames && lines === stopped.frames &&
+    fs.existsSync(path.join(rec.dir, "stereo.yml")), `the record switch wrote ${stopped.frames} pairs and result lines to ${rec.dir}`);
 
   // Pause holds the frame; resume moves on.
   await page.click("#pause");
@@ -146,7 +181,9 @@ try {
 
   // The end of the run: what the page shows against the truth of its last frame.
   await until("the end of the run", async () => (await api("/api/status")).running === false, 120000);
-  await sleep(1500);  // the page's next poll
+  await sleep(1500);  // the page's next event
+  const badge = await page.textContent("#badge");
+  check(badge === "SOURCE ENDED", `the badge says the source ended ("${badge}")`);
   const last = await api("/api/result");
   const first = nearestTruth(last.frame);
   const shown = await page.textContent("#nearest");
