@@ -522,6 +522,16 @@ void SendJpeg(httplib::Response& res, const JpegBytes& bytes) {
 // closed client, a server that stops): bounds the exit after Stop().
 constexpr double kStreamWaitS = 0.5;
 
+// Waits for a frame newer than `last`; while the loop is not running (not started yet, or ended)
+// it returns at once, so the stream's writer sleeps out the wait instead of spinning.
+int64_t WaitForNewFrame(const BaseStation* station, int64_t last) {
+  const int64_t frame = station->WaitForFrame(last, kStreamWaitS);
+  if (frame <= last && !station->running()) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(kStreamWaitS));
+  }
+  return frame;
+}
+
 // The server-sent event stream: "frame" for every published frame, "status" once a second
 // while none is.
 void StreamEvents(BaseStation* station, httplib::Response& res) {
@@ -535,8 +545,9 @@ void StreamEvents(BaseStation* station, httplib::Response& res) {
     if (*last == -2) {  // first: the state as it is, so that a client draws at once
       message = fmt::format("retry: 1000\nevent: status\ndata: {}\n\n", station->Status().dump());
       *last = -1;
+      return sink.write(message.data(), message.size());
     }
-    const int64_t frame = station->WaitForFrame(*last, kStreamWaitS);
+    const int64_t frame = WaitForNewFrame(station, *last);
     if (frame > *last) {
       const BaseStationSnapshot snap = station->Snapshot();
       *last = snap.frame_index;
@@ -567,7 +578,7 @@ void StreamJpegs(BaseStation* station, const std::string& view, httplib::Respons
   res.set_chunked_content_provider(
       "multipart/x-mixed-replace; boundary=linesightframe",
       [station, last, pick](size_t, httplib::DataSink& sink) {
-        const int64_t frame = station->WaitForFrame(*last, kStreamWaitS);
+        const int64_t frame = WaitForNewFrame(station, *last);
         if (frame <= *last) return sink.is_writable();
         const BaseStationSnapshot snap = station->Snapshot();
         *last = snap.frame_index;

@@ -7,13 +7,21 @@
 //    types, an ROI outside the image, an oversize body (413), unknown paths and path traversal
 //    (404), a wrong method (405 with Allow), a POST that is not JSON (415), a 100 kB URL (414), and
 //    a request sent in half and left open.
-// 2. Load: `--clients` concurrent clients for `--seconds` on the API and the images: no failed
-//    request, RSS growth under 10 % (from after a warm-up).
+// 2. Load: `--clients` concurrent clients for `--seconds`, a quarter on the event stream, a quarter
+//    on the MJPEG stream, the rest on the API and the images: no failed request, every stream
+//    client receives every frame, RSS growth under 10 % (from after a warm-up). Then a client
+//    that opens the video and never reads it does not slow the pipeline (frames in 10 s with it
+//    against 10 s without).
 // 3. With an access token: a POST without it or with a wrong one gets 401, with it 200.
 // 4. SIGTERM, and SIGINT, with a half-sent request open: the server exits cleanly within 2 s.
+// 5. A source that ends, and one whose files vanish mid-run: the status and the event stream say
+//    so (running false; the error names the file), and the server keeps serving.
 // Prints the figures; --json writes them.
+import { spawnSync } from "node:child_process";
 import fs from "node:fs";
 import net from "node:net";
+import os from "node:os";
+import path from "node:path";
 import process from "node:process";
 
 import { startServe } from "./serve_process.mjs";
@@ -74,6 +82,19 @@ function halfSent(port) {
     s.once("error", reject);
   });
 }
+// A client that asks for the video and never reads it (its socket buffers fill, then the server's
+// writes to it block until their timeout).
+function slowVideoClient(port) {
+  return new Promise((resolve, reject) => {
+    const s = net.connect(port, "127.0.0.1", () => {
+      s.write("GET /api/stream.mjpeg?view=left HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+      s.pause();
+      resolve(s);
+    });
+    s.on("error", () => {});
+    s.once("error", reject);
+  });
+}
 async function expectStatus(base, path, init, status, what) {
   const res = await fetch(base + path, init);
   const text = await res.text();
@@ -115,8 +136,33 @@ try {
   while (Date.now() < warm) await Promise.all(paths.map((p) => fetch(b + p).then((r) => r.arrayBuffer())));
   const rss0 = rssKb(server.child.pid);
   let ok = 0, failed = 0, maxMs = 0;
+  const frame0 = (await (await fetch(b + "/api/status")).json()).frame;
   const end = Date.now() + seconds * 1000;
+  const streamed = [];
   const worker = async (k) => {
+    if (k % 4 < 2) {  // a stream client: counts what it receives until the end
+      const marker = k % 4 === 0 ? "event: frame" : "--linesightframe";
+      const controller = new AbortController();
+      const stop = setTimeout(() => controller.abort(), end - Date.now());
+      let count = 0, tail = "";
+      try {
+        const res = await fetch(b + (k % 4 === 0 ? "/api/events" : "/api/stream.mjpeg"), { signal: controller.signal });
+        if (res.status !== 200) throw new Error(`status ${res.status}`);
+        const decoder = new TextDecoder("latin1");
+        for await (const chunk of res.body) {
+          const text = tail + decoder.decode(chunk, { stream: true });
+          count += text.split(marker).length - 1;
+          tail = text.slice(-marker.length);
+        }
+        failed++;  // the server ended a stream before the client did
+      } catch (e) {
+        if (e.name === "AbortError") ok++; else failed++;
+      } finally {
+        clearTimeout(stop);
+      }
+      streamed.push({ kind: k % 4 === 0 ? "events" : "mjpeg", count });
+      return;
+    }
     for (let i = k; Date.now() < end; i++) {
       const t = Date.now();
       try {
@@ -128,11 +174,31 @@ try {
     }
   };
   await Promise.all(Array.from({ length: clients }, (_, k) => worker(k)));
+  const frames = (await (await fetch(b + "/api/status")).json()).frame - frame0;
   const rss1 = rssKb(server.child.pid);
+  const fewest = (kind) => Math.min(...streamed.filter((c) => c.kind === kind).map((c) => c.count));
   Object.assign(figures, { clients, seconds, requests: ok + failed, failed, max_latency_ms: maxMs,
+    frames_published: frames, fewest_events_received: fewest("events"), fewest_mjpeg_parts_received: fewest("mjpeg"),
     rss_start_mb: rss0 / 1024, rss_end_mb: rss1 / 1024, rss_growth: rss1 / rss0 - 1 });
-  check(failed === 0, `${clients} clients for ${seconds} s: ${ok + failed} requests, ${failed} failed, slowest ${maxMs} ms`);
+  check(failed === 0, `${clients} clients for ${seconds} s: ${ok + failed} requests and streams, ${failed} failed, slowest request ${maxMs} ms`);
+  // The last frame may be published while the clients close: one fewer is still every frame.
+  check(fewest("events") >= frames - 1 && fewest("mjpeg") >= frames - 1,
+    `every stream client received every frame: ${frames} published, fewest received ${fewest("events")} events, ${fewest("mjpeg")} MJPEG parts`);
   check(rss1 / rss0 - 1 < 0.10, `RSS ${(rss0 / 1024).toFixed(0)} -> ${(rss1 / 1024).toFixed(0)} MB (${(100 * (rss1 / rss0 - 1)).toFixed(1)} %)`);
+
+  // A client that opens the video and never reads it: the pipeline keeps the rate it has without it.
+  const framesIn = async (ms) => {
+    const f0 = (await (await fetch(b + "/api/status")).json()).frame;
+    await sleep(ms);
+    return (await (await fetch(b + "/api/status")).json()).frame - f0;
+  };
+  const alone = await framesIn(10000);
+  const slow = await slowVideoClient(server.port);
+  const withSlow = await framesIn(10000);
+  slow.destroy();
+  Object.assign(figures, { frames_in_10s_alone: alone, frames_in_10s_with_a_client_that_never_reads: withSlow });
+  check(withSlow >= 0.8 * alone && withSlow > 0,
+    `a client that never reads its video does not slow the pipeline: ${withSlow} frames in 10 s with it, ${alone} without`);
 
   // 4. SIGTERM with half-sent requests open.
   figures.sigterm_exit_ms = await expectCleanExit(server, "SIGTERM");
@@ -161,6 +227,52 @@ try {
 } finally {
   guarded.child.kill("SIGKILL");
 }
+// 5. A source that ends, and a source whose files vanish.
+const pairs = fs.mkdtempSync(path.join(os.tmpdir(), "linesight-reliability-"));
+try {
+  const render = spawnSync(linesight, ["render", "--sequence", "3", "--seed", "3", "--supersampling", "1", "--out", pairs],
+    { encoding: "utf8" });
+  if (render.status !== 0) throw new Error(`render failed: ${render.stderr}`);
+  const images = ["--source", `images:${pairs}/left_*.png,${pairs}/right_*.png`, "--calib", `${pairs}/stereo.yml`, "--threads", "1"];
+  const ends = await startServe(linesight, images);
+  try {
+    const events = await fetch(ends.base + "/api/events");
+    const reader = events.body.getReader(), decoder = new TextDecoder();
+    let text = "";
+    const deadline = Date.now() + 60000;
+    while (!/"running":false/.test(text) && Date.now() < deadline) text += decoder.decode((await reader.read()).value);
+    await reader.cancel();
+    const s = await (await fetch(ends.base + "/api/status")).json();
+    check(s.running === false && s.error === "" && s.frame === 2 && /"running":false/.test(text),
+      `a source that ends: status running ${s.running} after frame ${s.frame}, error "${s.error}", the event stream says so too`);
+    await expectStatus(ends.base, "/api/result", {}, 200, "the last result is still served after the end");
+  } finally {
+    ends.child.kill("SIGKILL");
+  }
+  // The files vanish after the first frame (at a capped rate, so the second read comes later).
+  const vanishing = await startServe(linesight, [...images, "--max-fps", "0.5"]);
+  try {
+    for (const f of fs.readdirSync(pairs)) if (/^(left|right)_000[12]\.png$/.test(f)) fs.rmSync(path.join(pairs, f));
+    const end = Date.now() + 30000;
+    let s = {};
+    while (Date.now() < end) {
+      s = await (await fetch(vanishing.base + "/api/status")).json();
+      if (!s.running) break;
+      await sleep(200);
+    }
+    check(s.running === false && /left_0001\.png/.test(s.error),
+      `files that vanish: running ${s.running}, error "${s.error}"`);
+    await expectStatus(vanishing.base, "/api/status", {}, 200, "still serving after the source failed");
+  } finally {
+    vanishing.child.kill("SIGKILL");
+  }
+} catch (e) {
+  failures++;
+  console.error(`FAIL: ${e.message}`);
+} finally {
+  fs.rmSync(pairs, { recursive: true, force: true });
+}
+
 if (jsonPath) fs.writeFileSync(jsonPath, JSON.stringify(figures, null, 2) + "\n");
 console.log(failures ? `FAILED (${failures})` : "passed");
 process.exit(failures ? 1 : 0);
