@@ -9,6 +9,9 @@
 #include "linesight/core/error.h"
 #include "linesight/io/image_io.h"
 #include "linesight/io/json_io.h"
+#include "linesight/io/stereo_calibration.h"
+#include "linesight/server/chain_bench.h"
+#include "linesight/sim/power_line_scene.h"
 #include "linesight/stereo/throughput_bench.h"
 
 namespace linesight::cli {
@@ -44,7 +47,56 @@ int RunBench(int argc, char** argv) {
                  "left image to resize to each size (default: synthetic textured pair)");
   app.add_option("--right", right_path, "right image (with --left)");
   app.add_option("--json", json_path, "machine-readable report (- for stdout)");
+  bool chain = false;
+  ChainBenchOptions chain_options;
+  std::string calib_path, finder = "line";
+  app.add_flag("--chain", chain,
+               "measure the live chain instead (what serve does per frame: grab, rectify, match, "
+               "find and range, encode) on the demo's scene, or on --left/--right with --calib; "
+               "default methods isgm,sgm,sgbm, ratios against sgbm through the same chain");
+  app.add_option("--calib", calib_path, "--chain: calibration of --left/--right");
+  app.add_option("--frames", chain_options.frames, "--chain: timed frames per method")
+      ->capture_default_str();
+  app.add_option("--finder", finder, "--chain: line or regions")->capture_default_str();
+  app.add_option("--min-depth", chain_options.station.pipeline.min_depth_m,
+                 "--chain: working range, nearest depth (m)")
+      ->capture_default_str();
+  app.add_option("--max-depth", chain_options.station.pipeline.max_depth_m,
+                 "--chain: working range, farthest depth (m)")
+      ->capture_default_str();
   return RunCommand(app, argc, argv, [&] {
+    if (chain) {
+      if (app.count("--methods")) chain_options.methods = options.methods;
+      if (app.count("--warmup")) chain_options.warmup = options.warmup;
+      chain_options.station.pipeline.threads = options.threads;
+      chain_options.station.finder = ParseAutoFinder(finder);
+      cv::Mat left, right;
+      StereoCalibration calibration;
+      std::string input;
+      if (left_path.empty() != right_path.empty() || left_path.empty() != calib_path.empty()) {
+        throw UsageError("--chain takes --left, --right and --calib together, or none of them");
+      }
+      if (left_path.empty()) {
+        const sim::PowerLineScene scene = sim::RenderPowerLineScene(sim::PowerLineSceneOptions{});
+        left = scene.left;
+        right = scene.right;
+        calibration = scene.calibration;
+        input = "the demo's scene";
+      } else {
+        left = ReadImage(left_path, ImageColor::kColor);
+        right = ReadImage(right_path, ImageColor::kColor);
+        calibration = ReadStereoCalibration(calib_path);
+        input = left_path;
+      }
+      const ChainBenchReport report =
+          RunChainBench(left, right, calibration, input, chain_options, [](const ChainBenchRow& r) {
+            std::fprintf(stderr, "bench --chain: %s %.1f ms per frame\n", r.method.c_str(),
+                         r.frame_ms);
+          });
+      if (json_path != "-") std::fputs(ChainBenchMarkdown(report).c_str(), stdout);
+      if (!json_path.empty()) WriteJson(json_path, ChainBenchJson(report));
+      return;
+    }
     options.sizes.clear();
     for (const std::string& s : sizes) options.sizes.push_back(ParseBenchSize(s));
     if (left_path.empty() != right_path.empty()) throw UsageError("--left and --right go together");

@@ -54,6 +54,30 @@ std::vector<std::string> SplitParts(const std::string& spec, const std::string& 
 // Still images.
 // ---------------------------------------------------------------------------------------------
 
+class MemoryPairSource final : public FrameSource {
+ public:
+  MemoryPairSource(cv::Mat left, cv::Mat right, std::optional<StereoCalibration> calibration,
+                   std::string description)
+      : left_(std::move(left)),
+        right_(std::move(right)),
+        calibration_(std::move(calibration)),
+        description_(std::move(description)) {}
+
+  std::optional<StereoFrame> Read() override {
+    StereoFrame frame{left_.clone(), right_.clone(), next_++, SecondsSince(start_)};
+    return frame;
+  }
+  std::string Describe() const override { return description_; }
+  std::optional<StereoCalibration> Calibration() const override { return calibration_; }
+
+ private:
+  cv::Mat left_, right_;
+  std::optional<StereoCalibration> calibration_;
+  std::string description_;
+  int64_t next_ = 0;
+  Clock::time_point start_ = Clock::now();
+};
+
 class ImageSequenceSource final : public FrameSource {
  public:
   ImageSequenceSource(std::vector<std::filesystem::path> left,
@@ -494,4 +518,16 @@ cv::Mat ToBgr8(const cv::Mat& image, const std::string& what) {
 }
 
 }  // namespace detail
+std::unique_ptr<FrameSource> RepeatedPairSource(const cv::Mat& left, const cv::Mat& right,
+                                                std::optional<StereoCalibration> calibration,
+                                                const std::string& description) {
+  cv::Mat l = detail::ToBgr8(left, description + " (left)");
+  cv::Mat r = detail::ToBgr8(right, description + " (right)");
+  if (l.size() != r.size()) {
+    throw InputError(fmt::format("{}: the left image is {}x{} but the right is {}x{}", description,
+                                 l.cols, l.rows, r.cols, r.rows));
+  }
+  return std::make_unique<MemoryPairSource>(l, r, std::move(calibration), description);
+}
+
 }  // namespace linesight

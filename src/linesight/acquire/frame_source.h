@@ -78,6 +78,13 @@ class FrameSource {
 std::unique_ptr<FrameSource> OpenFrameSource(const std::string& spec,
                                              const FrameSourceOptions& options = {});
 
+// One pair held in memory, delivered again (as copies) for every frame with wall-clock timestamps,
+// with the calibration it comes with: the live loop's benchmark and tests. Throws InputError when
+// the images differ in size or are not 8-bit grey or BGR.
+std::unique_ptr<FrameSource> RepeatedPairSource(const cv::Mat& left, const cv::Mat& right,
+                                                std::optional<StereoCalibration> calibration,
+                                                const std::string& description);
+
 // The schemes OpenFrameSource understands, for help texts.
 std::vector<std::string> FrameSourceSchemes();
 

@@ -18,34 +18,13 @@
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/core/key_value.h"
+#include "linesight/core/machine.h"
 #include "linesight/core/timer.h"
 #include "linesight/stereo/matcher.h"
 #include "linesight/stereo/sgm.h"
 
 namespace linesight {
 namespace {
-
-std::string CpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) return line.substr(colon + 2);
-    }
-  }
-  return "unknown";
-}
-
-// A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1.
-long ProcStatusKb(const std::string& field) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::stol(line.substr(field.size() + 1));
-  }
-  return -1;
-}
 
 // Seeded textured pair with a slanted disparity plane spanning 10 % .. 70 % of the range plus a
 // nearer box, so every matcher does representative work (not a constant shift).
