@@ -217,8 +217,10 @@ class CaptureSource final : public FrameSource {
       first_.reset();
     } else {
       frame = Grab();
+      if (!frame && !devices_) CheckNotTruncated();
       if (!frame && loop_ && next_ > 0) {
         for (cv::VideoCapture& c : captures_) c.set(cv::CAP_PROP_POS_FRAMES, 0);
+        pass_frames_ = 0;
         frame = Grab();
       }
     }
@@ -228,6 +230,7 @@ class CaptureSource final : public FrameSource {
       }
       return std::nullopt;
     }
+    ++pass_frames_;
     frame->index = next_++;
     frame->timestamp_s = SecondsSince(start_);
     return frame;
@@ -238,6 +241,21 @@ class CaptureSource final : public FrameSource {
   bool IsLive() const override { return devices_; }
 
  private:
+  // A video file that ends before the frame count its container announces is truncated or
+  // damaged: an error naming the file, not a quiet end (a recording cut short by a full disk or
+  // a dropped connection must not pass for a complete run).
+  void CheckNotTruncated() {
+    for (size_t i = 0; i < captures_.size(); ++i) {
+      const double announced = captures_[i].get(cv::CAP_PROP_FRAME_COUNT);
+      if (announced > 0 && double(pass_frames_) + 1 < announced) {
+        throw InputError(fmt::format(
+            "source '{}': video '{}' ended after {} of the {} frames its header announces "
+            "(truncated or damaged)",
+            spec_, names_[i], pass_frames_, int64_t(announced)));
+      }
+    }
+  }
+
   std::optional<StereoFrame> Grab() {
     // grab() both first, then retrieve(): the two cameras' exposures are as close in time as
     // V4L2 allows without a hardware trigger.
@@ -267,6 +285,7 @@ class CaptureSource final : public FrameSource {
   std::optional<StereoFrame> first_;
   std::string description_;
   int64_t next_ = 0;
+  int64_t pass_frames_ = 0;  // frames delivered since the files' start (this pass)
   Clock::time_point start_ = Clock::now();
 };
 

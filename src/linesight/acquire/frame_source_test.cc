@@ -3,6 +3,9 @@
 #include <filesystem>
 #include <string>
 
+#include <fstream>
+#include <iterator>
+
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -154,6 +157,40 @@ TEST_F(FrameSourceTest, SideBySideVideoAndTwoVideos) {
   loop.loop = true;
   auto looping = OpenFrameSource("sbs:" + (dir_ / "sbs.avi").string(), loop);
   for (int i = 0; i < 9; ++i) ASSERT_TRUE(looping->Read()) << "frame " << i;
+}
+
+// A video cut short (a recording stopped by a full disk, a dropped copy) ends with an error that
+// names the file and how much of it was there, not as a quiet end of the run.
+TEST_F(FrameSourceTest, ATruncatedVideoIsAnErrorNamingTheFile) {
+  std::vector<cv::Mat> frames;
+  cv::RNG rng(5);
+  for (int i = 0; i < 20; ++i) {
+    cv::Mat frame(48, 64, CV_8UC3);
+    rng.fill(frame, cv::RNG::UNIFORM, 0, 256);  // noise: every frame a similar, large size
+    frames.push_back(frame);
+  }
+  WriteVideo(dir_ / "whole.avi", frames);
+  std::ifstream in(dir_ / "whole.avi", std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream(dir_ / "cut.avi", std::ios::binary) << bytes.substr(0, bytes.size() * 6 / 10);
+
+  const std::string whole = (dir_ / "whole.avi").string(), cut = (dir_ / "cut.avi").string();
+  auto complete = OpenFrameSource("video:" + whole + "," + whole);
+  int read = 0;
+  while (complete->Read()) ++read;
+  EXPECT_EQ(read, 20);
+
+  auto truncated = OpenFrameSource("video:" + whole + "," + cut);
+  read = 0;
+  try {
+    while (truncated->Read()) ++read;
+    FAIL() << "a truncated video ended quietly after " << read << " frames";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cut.avi"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("of the 20 frames"), std::string::npos) << e.what();
+  }
+  EXPECT_GT(read, 5);
+  EXPECT_LT(read, 20);
 }
 
 TEST_F(FrameSourceTest, SyntheticSceneCarriesItsCalibrationAndFreshNoise) {

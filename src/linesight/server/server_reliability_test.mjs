@@ -14,8 +14,8 @@
 //    against 10 s without).
 // 3. With an access token: a POST without it or with a wrong one gets 401, with it 200.
 // 4. SIGTERM, and SIGINT, with a half-sent request open: the server exits cleanly within 2 s.
-// 5. A source that ends, and one whose files vanish mid-run: the status and the event stream say
-//    so (running false; the error names the file), and the server keeps serving.
+// 5. A source that ends, a truncated video, and files that vanish mid-run: the status and the event
+//    stream say so (running false; the error names the file), and the server keeps serving.
 // Prints the figures; --json writes them.
 import { spawnSync } from "node:child_process";
 import fs from "node:fs";
@@ -249,6 +249,38 @@ try {
   } finally {
     ends.child.kill("SIGKILL");
   }
+  // A truncated video (12 frames announced, the right file cut at 60 %): the error names it.
+  const video = spawnSync("/usr/bin/python3", ["-c", `
+import cv2, glob, sys
+d = sys.argv[1]
+for side in ("left", "right"):
+    images = [cv2.imread(f) for f in sorted(glob.glob(f"{d}/{side}_*.png"))]
+    h, w = images[0].shape[:2]
+    out = cv2.VideoWriter(f"{d}/{side}.avi", cv2.VideoWriter_fourcc(*"MJPG"), 10, (w, h))
+    for i in range(12):
+        out.write(images[i % len(images)])
+    out.release()
+data = open(f"{d}/right.avi", "rb").read()
+open(f"{d}/right_cut.avi", "wb").write(data[: len(data) * 6 // 10])
+`, pairs], { encoding: "utf8" });
+  if (video.status !== 0) throw new Error(`writing the test videos failed (python3-opencv): ${video.stderr}`);
+  const cut = await startServe(linesight, ["--source", `video:${pairs}/left.avi,${pairs}/right_cut.avi`,
+    "--calib", `${pairs}/stereo.yml`, "--threads", "1"]);
+  try {
+    const end = Date.now() + 60000;
+    let s = {};
+    while (Date.now() < end) {
+      s = await (await fetch(cut.base + "/api/status")).json();
+      if (!s.running) break;
+      await sleep(200);
+    }
+    check(s.running === false && /right_cut\.avi' ended after \d+ of the 12 frames/.test(s.error),
+      `a truncated video: running ${s.running}, error "${s.error}"`);
+    await expectStatus(cut.base, "/api/status", {}, 200, "still serving after the truncated video");
+  } finally {
+    cut.child.kill("SIGKILL");
+  }
+
   // The files vanish after the first frame (at a capped rate, so the second read comes later).
   const vanishing = await startServe(linesight, [...images, "--max-fps", "0.5"]);
   try {
