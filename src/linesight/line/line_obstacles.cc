@@ -1,6 +1,7 @@
 #include "linesight/line/line_obstacles.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -128,6 +129,56 @@ bool OnTheLine(const LinePoint& p, const ConductorModel& model, const StereoGeom
           std::fabs(p.z - g.DepthFromDisparity(d_line)) <= o.attach_depth_m);
 }
 
+// Extent of a piece in the conductor's frame: 5th..95th percentile along, below and beside the
+// line.
+struct PieceExtent {
+  double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+  // Gap between two extents as boxes (0 when they overlap), m.
+  double GapTo(const PieceExtent& e) const {
+    double sum = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double gap = std::max({0.0, e.lo[k] - hi[k], lo[k] - e.hi[k]});
+      sum += gap * gap;
+    }
+    return std::sqrt(sum);
+  }
+};
+
+// Marks, in `keep`, every piece whose extent comes within `gap_m` of a kept piece's, repeatedly
+// (a chain of pieces hanging from one another joins too). Label 0 is the background.
+void JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector<int>& label,
+                            double gap_m, std::vector<bool>* keep) {
+  if (gap_m <= 0) return;
+  const size_t count = keep->size();
+  std::vector<std::array<std::vector<double>, 3>> coords(count);
+  for (size_t i = 0; i < run.size(); ++i) {
+    auto& c = coords[size_t(label[i])];
+    c[0].push_back(run[i].arc);
+    c[1].push_back(run[i].down);
+    c[2].push_back(run[i].side);
+  }
+  std::vector<PieceExtent> extent(count);
+  for (size_t l = 1; l < count; ++l) {
+    if (coords[l][0].empty()) continue;
+    for (int k = 0; k < 3; ++k) {
+      extent[l].lo[k] = Quantile(coords[l][k], 0.05);
+      extent[l].hi[k] = Quantile(coords[l][k], 0.95);
+    }
+  }
+  for (bool grew = true; grew;) {
+    grew = false;
+    for (size_t l = 1; l < count; ++l) {
+      if ((*keep)[l] || coords[l][0].empty()) continue;
+      for (size_t k = 1; k < count; ++k) {
+        if ((*keep)[k] && extent[l].GapTo(extent[k]) <= gap_m) {
+          (*keep)[l] = grew = true;
+          break;
+        }
+      }
+    }
+  }
+}
+
 // The points of a run that belong to an obstacle of this line: the run's 8-connected pieces in the
 // image (1 px gaps closed) that touch the conductor with at least min_attached_pixels points. A
 // piece of the tower or of a mismatched background that shares the run's stretch of line but is
@@ -155,10 +206,12 @@ std::vector<LinePoint> AttachedPieces(const std::vector<LinePoint>& run,
     label[i] = labels.at<int>(run[i].y - y0 + 1, run[i].x - x0 + 1);
     on_line[label[i]] += OnTheLine(run[i], model, g, o);
   }
+  std::vector<bool> keep(size_t(count), false);
+  for (int l = 1; l < count; ++l) keep[size_t(l)] = on_line[l] >= o.min_attached_pixels;
+  JoinThinlyLinkedPieces(run, label, o.join_gap_m, &keep);
   std::vector<LinePoint> kept;
   for (size_t i = 0; i < run.size(); ++i) {
-    if (on_line[label[i]] < o.min_attached_pixels) continue;
-    kept.push_back(run[i]);
+    if (keep[size_t(label[i])]) kept.push_back(run[i]);
   }
   for (int l = 1; l < count; ++l) *attached += on_line[l] >= o.min_attached_pixels ? on_line[l] : 0;
   return kept;
@@ -289,6 +342,8 @@ void LineObstacleOptions::Check() const {
   CheckOption(min_pixels >= 1, "LineObstacleOptions.min_pixels", min_pixels, "must be >= 1");
   CheckOption(min_attached_pixels >= 1, "LineObstacleOptions.min_attached_pixels",
               min_attached_pixels, "must be >= 1");
+  CheckOption(join_gap_m >= 0 && join_gap_m <= 1, "LineObstacleOptions.join_gap_m", join_gap_m,
+              "must be in [0, 1] m");
   CheckOption(insulator_min_above_m > 0, "LineObstacleOptions.insulator_min_above_m",
               insulator_min_above_m, "must be > 0");
   CheckOption(insulator_min_side_m > 0, "LineObstacleOptions.insulator_min_side_m",

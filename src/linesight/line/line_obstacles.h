@@ -65,6 +65,15 @@ struct LineObstacleOptions {
   double speckle_range_px = 2.0;
   int min_pixels = 25;          // fewer body pixels: not an obstacle (too small or too far)
   int min_attached_pixels = 4;  // fewer touching pixels: not on this line
+  // The parts of one obstacle are joined by members too thin to be bodies (an insulator string's
+  // 18 mm link from its clamp to the first disc, a damper's 13 mm messenger from its clamp to its
+  // weights), so they are separate pieces in the image. A piece that does not touch the conductor
+  // belongs to the obstacle when its extent in the conductor's frame (along, below/above and
+  // beside the line, 5th-95th percentiles) comes within join_gap_m of a piece that does (or of one
+  // joined before): 0.15 m spans the link above a suspension clamp (0.09 m) and the messenger's
+  // gap to a damper weight (~0.1 m); a tower's leg beside the line stays out. 0 = only touching
+  // pieces.
+  double join_gap_m = 0.15;
   // Type thresholds (m, after removing the fattening): see the file comment.
   double insulator_min_above_m = 0.25;
   double insulator_min_side_m = 0.08;

@@ -103,6 +103,45 @@ TEST(LineObstaclesTest, FindsTheNearestObstacleOnTheLineWithTypeAndDistances) {
   EXPECT_EQ(checked, 3);
 }
 
+// An insulator string is joined to its suspension clamp by an 18 mm link that is too thin to be a
+// body: its discs are a piece of their own that does not touch the conductor. Tuning seed 7's
+// string while it is 2-5 m ahead along the line (every 20th frame): whenever it is found, its
+// discs are joined to the clamp (join_gap_m) and it is typed an insulator string; it is found in
+// most of the frames.
+TEST(LineObstaclesTest, AnInsulatorStringIsJoinedToItsClampAndTypedAsAString) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(7));
+  double string_arc = -1;  // its centre from the robot's start
+  for (const sim::SequenceLayoutEntry& e : sequence.layout()) {
+    if (e.type == sim::ObstacleType::kInsulatorString) string_arc = e.arc_m;
+  }
+  ASSERT_GT(string_arc, 0) << "tuning seed 7 has an insulator string";
+  int scored = 0, found_count = 0;
+  for (int index = 0; index < sequence.size(); index += 20) {
+    const double ahead = string_arc - sequence.TravelledAt(index);
+    if (ahead < 1.8 || ahead > 5.4) continue;  // not worth rendering: out of the scored range
+    const sim::PowerLineScene scene = sequence.Render(index);
+    for (const sim::RenderedObstacle& truth : scene.obstacles) {
+      if (truth.type != sim::ObstacleType::kInsulatorString || truth.near_arc_m < 2.0 ||
+          truth.near_arc_m > 5.0 || truth.visible_pixels == 0) {
+        continue;
+      }
+      ++scored;
+      const RangingPipeline pipeline(scene.calibration, MatchOnOneThread());
+      const LineObstacles found =
+          FindLineObstacles(pipeline, pipeline.Process(scene.left, scene.right), {});
+      const int k = MatchTruth(found, truth);
+      if (k < 0) continue;
+      ++found_count;
+      EXPECT_EQ(found.obstacles[k].type, LineObstacleType::kInsulator)
+          << "frame " << index << ", the string at " << truth.near_arc_m << " m: typed "
+          << LineObstacleTypeName(found.obstacles[k].type) << " (above "
+          << found.obstacles[k].above_m << " m)";
+    }
+  }
+  EXPECT_GE(scored, 4);
+  EXPECT_GE(2 * found_count, scored) << found_count << " of " << scored << " frames";
+}
+
 TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   sim::PowerLineSceneOptions scene_options;
   scene_options.sensor.supersampling = 1;

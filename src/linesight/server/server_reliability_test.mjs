@@ -82,6 +82,17 @@ function halfSent(port) {
     s.once("error", reject);
   });
 }
+// The status once the loop has stopped (or the last one seen when `ms` pass first).
+async function statusOnceStopped(base, ms) {
+  const end = Date.now() + ms;
+  let s = {};
+  while (Date.now() < end) {
+    s = await (await fetch(base + "/api/status")).json();
+    if (!s.running) break;
+    await sleep(200);
+  }
+  return s;
+}
 // A client that asks for the video and never reads it (its socket buffers fill, then the server's
 // writes to it block until their timeout).
 function slowVideoClient(port) {
@@ -267,13 +278,7 @@ open(f"{d}/right_cut.avi", "wb").write(data[: len(data) * 6 // 10])
   const cut = await startServe(linesight, ["--source", `video:${pairs}/left.avi,${pairs}/right_cut.avi`,
     "--calib", `${pairs}/stereo.yml`, "--threads", "1"]);
   try {
-    const end = Date.now() + 60000;
-    let s = {};
-    while (Date.now() < end) {
-      s = await (await fetch(cut.base + "/api/status")).json();
-      if (!s.running) break;
-      await sleep(200);
-    }
+    const s = await statusOnceStopped(cut.base, 60000);
     check(s.running === false && /right_cut\.avi' ended after \d+ of the 12 frames/.test(s.error),
       `a truncated video: running ${s.running}, error "${s.error}"`);
     await expectStatus(cut.base, "/api/status", {}, 200, "still serving after the truncated video");
@@ -285,13 +290,7 @@ open(f"{d}/right_cut.avi", "wb").write(data[: len(data) * 6 // 10])
   const vanishing = await startServe(linesight, [...images, "--max-fps", "0.5"]);
   try {
     for (const f of fs.readdirSync(pairs)) if (/^(left|right)_000[12]\.png$/.test(f)) fs.rmSync(path.join(pairs, f));
-    const end = Date.now() + 30000;
-    let s = {};
-    while (Date.now() < end) {
-      s = await (await fetch(vanishing.base + "/api/status")).json();
-      if (!s.running) break;
-      await sleep(200);
-    }
+    const s = await statusOnceStopped(vanishing.base, 30000);
     check(s.running === false && /left_0001\.png/.test(s.error),
       `files that vanish: running ${s.running}, error "${s.error}"`);
     await expectStatus(vanishing.base, "/api/status", {}, 200, "still serving after the source failed");
