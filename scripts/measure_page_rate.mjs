@@ -1,7 +1,8 @@
 // The base-station page's frame rate against the pipeline's, measured in Debian's chromium:
 // starts `linesight serve` with the given arguments on loopback, opens the page, and over
 // --seconds counts the frames the page shows (every one it receives by server-sent events) and
-// the frames the station publishes. Prints both rates; --json writes them.
+// the frames the station publishes. Prints both rates; --json writes them, --screenshot FILE saves
+// the page at the end.
 //
 //   node scripts/measure_page_rate.mjs --linesight build/apps/linesight --seconds 30 -- \
 //     --source pair:out/left.png,out/right.png --calib out/stereo.yml
@@ -21,6 +22,7 @@ function arg(name, fallback) {
   return process.argv[i + 1];
 }
 const linesight = arg("--linesight"), seconds = Number(arg("--seconds", "30")), jsonPath = arg("--json", "");
+const screenshot = arg("--screenshot", "");
 const serveArgs = process.argv.slice(process.argv.indexOf("--") + 1);
 const { chromium } = await import("playwright-core");
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -52,6 +54,7 @@ try {
     latency_ms: s1.latency_ms,
   };
   console.log(JSON.stringify(figures, null, 2));
+  if (screenshot) await page.screenshot({ path: screenshot, fullPage: true });
   if (jsonPath) fs.writeFileSync(jsonPath, JSON.stringify(figures, null, 2) + "\n");
 } finally {
   await browser.close();
