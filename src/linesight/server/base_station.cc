@@ -132,34 +132,132 @@ void BaseStation::Stop() {
 
 void BaseStation::Loop() {
   try {
-    while (!stop_) {
-      {
-        std::unique_lock lock(mutex_);
-        if (paused_) {
-          published_.wait_for(lock, std::chrono::milliseconds(100));
-          continue;
-        }
-      }
-      const auto started = Clock::now();
-      if (!Step()) break;
-      if (options_.max_frames > 0) {
-        std::lock_guard lock(mutex_);
-        if (snapshot_.frame_index + 1 >= options_.max_frames) break;
-      }
-      if (options_.max_fps > 0) {
-        std::this_thread::sleep_until(started +
-                                      std::chrono::duration<double>(1.0 / options_.max_fps));
-      }
+    if (options_.overlap) {
+      LoopOverlapped();
+    } else {
+      LoopSequential();
     }
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
-    error_ = e.what();
+    if (error_.empty()) error_ = e.what();
   }
   running_ = false;
   published_.notify_all();
 }
 
+// Waits while paused; false when asked to stop.
+bool BaseStation::WaitWhilePaused() {
+  std::unique_lock lock(mutex_);
+  while (paused_ && !stop_) published_.wait_for(lock, std::chrono::milliseconds(100));
+  return !stop_;
+}
+
+bool BaseStation::LastFrameReached(int64_t frame_index) const {
+  return options_.max_frames > 0 && frame_index + 1 >= options_.max_frames;
+}
+
+void BaseStation::LoopSequential() {
+  while (WaitWhilePaused()) {
+    const auto started = Clock::now();
+    std::optional<MatchedFrame> matched = GrabAndMatch();
+    if (!matched) break;
+    const int64_t index = matched->frame.index;
+    RangeAndPublish(std::move(*matched));
+    if (LastFrameReached(index)) break;
+    if (options_.max_fps > 0) {
+      std::this_thread::sleep_until(started +
+                                    std::chrono::duration<double>(1.0 / options_.max_fps));
+    }
+  }
+}
+
+// Two stages on two threads: a grabber that reads, rectifies and matches the next pair while this
+// thread ranges, tracks, encodes and publishes the previous one. The grabber starts on a pair only
+// when the ranging has taken the one before, so at most one matched pair ever waits: the newest
+// pair the source has is the one processed (latest frame first), nothing queues up latency (a
+// result is published at most two frame times after its pair was in hand), and a recorded source
+// still has every frame processed.
+void BaseStation::LoopOverlapped() {
+  std::mutex handoff_mutex;
+  std::condition_variable handoff_changed;
+  std::optional<MatchedFrame> handoff;
+  bool grabber_done = false, halt = false;
+  std::string grabber_error;
+  std::thread grabber([&] {
+    try {
+      while (WaitWhilePaused()) {
+        {
+          std::unique_lock lock(handoff_mutex);
+          handoff_changed.wait(lock, [&] { return !handoff || halt; });
+          if (halt) break;
+        }
+        const auto started = Clock::now();
+        std::optional<MatchedFrame> matched = GrabAndMatch();
+        if (!matched) break;
+        const int64_t index = matched->frame.index;
+        {
+          std::lock_guard lock(handoff_mutex);
+          handoff = std::move(matched);
+        }
+        handoff_changed.notify_all();
+        if (LastFrameReached(index)) break;
+        if (options_.max_fps > 0) {
+          std::this_thread::sleep_until(started +
+                                        std::chrono::duration<double>(1.0 / options_.max_fps));
+        }
+      }
+    } catch (const std::exception& e) {
+      std::lock_guard lock(handoff_mutex);
+      grabber_error = e.what();
+    }
+    {
+      std::lock_guard lock(handoff_mutex);
+      grabber_done = true;
+    }
+    handoff_changed.notify_all();
+  });
+  const auto stop_grabber = [&] {
+    {
+      std::lock_guard lock(handoff_mutex);
+      halt = true;
+    }
+    handoff_changed.notify_all();
+    grabber.join();
+  };
+  try {
+    for (;;) {
+      std::optional<MatchedFrame> matched;
+      {
+        std::unique_lock lock(handoff_mutex);
+        // Woken at least every 100 ms to see a stop request.
+        while (!handoff && !grabber_done && !stop_) {
+          handoff_changed.wait_for(lock, std::chrono::milliseconds(100));
+        }
+        if (!handoff) break;  // the grabber ended (source ended or failed) or a stop was asked
+        matched = std::move(handoff);
+        handoff.reset();
+      }
+      handoff_changed.notify_all();
+      const int64_t index = matched->frame.index;
+      RangeAndPublish(std::move(*matched));
+      if (LastFrameReached(index) || stop_) break;
+    }
+  } catch (...) {
+    stop_grabber();
+    throw;
+  }
+  stop_grabber();
+  if (!grabber_error.empty()) throw InputError(grabber_error);
+}
+
 bool BaseStation::Step() {
+  std::optional<MatchedFrame> matched = GrabAndMatch();
+  if (!matched) return false;
+  RangeAndPublish(std::move(*matched));
+  return true;
+}
+
+std::optional<BaseStation::MatchedFrame> BaseStation::GrabAndMatch() {
   Stopwatch grab_watch;
   std::optional<StereoFrame> frame;
   if (first_frame_) {
@@ -168,15 +266,26 @@ bool BaseStation::Step() {
   } else {
     frame = source_->Read();
   }
-  if (!frame) return false;
-  StageTimes stages;
-  stages.grab = grab_watch.ElapsedMs();
-  Stopwatch in_hand;  // the latency runs from here to the publication
+  if (!frame) return std::nullopt;
+  MatchedFrame matched;
+  matched.stages.grab = grab_watch.ElapsedMs();
+  matched.in_hand.Restart();  // the latency runs from here to the publication
   if (frame->left.size() != image_size_) {
     throw InputError(fmt::format("source '{}': frame {} is {}x{}, the stream started at {}x{}",
                                  source_->Describe(), frame->index, frame->left.cols,
                                  frame->left.rows, image_size_.width, image_size_.height));
   }
+  matched.ranged = pipeline_->Process(frame->left, frame->right);
+  matched.stages.rectify = matched.ranged.rectify_ms;
+  matched.stages.match = matched.ranged.match_ms;
+  matched.frame = std::move(*frame);
+  return matched;
+}
+
+void BaseStation::RangeAndPublish(MatchedFrame matched) {
+  const StereoFrame* frame = &matched.frame;
+  const RangingFrame& ranged = matched.ranged;
+  StageTimes& stages = matched.stages;
   std::vector<cv::Rect> rois;
   bool automatic = false;
   {
@@ -191,9 +300,6 @@ bool BaseStation::Step() {
   }
   const bool line_mode = automatic && options_.finder == AutoFinder::kLine;
 
-  const RangingFrame ranged = pipeline_->Process(frame->left, frame->right);
-  stages.rectify = ranged.rectify_ms;
-  stages.match = ranged.match_ms;
   Stopwatch watch;
   std::vector<RangeResult> results = pipeline_->RangeRois(ranged, rois);
   const size_t num_roi = results.size();
@@ -309,7 +415,7 @@ bool BaseStation::Step() {
         if (health_history_.size() > 60) health_history_.pop_front();
       }
     }
-    stages.latency = in_hand.ElapsedMs();
+    stages.latency = matched.in_hand.ElapsedMs();
     const bool first = frames_processed_ == 0;
     for (auto [average, value] : {std::pair{&stage_average_.grab, stages.grab},
                                   {&stage_average_.rectify, stages.rectify},
@@ -334,7 +440,6 @@ bool BaseStation::Step() {
   }
   published_.notify_all();
   recorder_.Add(frame->left, frame->right, result);
-  return true;
 }
 
 JpegBytes BaseStation::DrawAnnotated(const cv::Mat& left_rectified,
@@ -439,6 +544,7 @@ nlohmann::json BaseStation::Status() const {
           {"fps", snapshot_.fps},
           {"process_ms", snapshot_.process_ms},
           {"stages_ms", stage_average_.ToJson()},
+          {"overlap", options_.overlap},
           {"latency_ms", stage_average_.latency},
           {"age_s", age_s},
           {"stale", stale},

@@ -58,6 +58,7 @@
 #include <opencv2/core.hpp>
 
 #include "linesight/acquire/frame_source.h"
+#include "linesight/core/timer.h"
 #include "linesight/line/line_obstacles.h"
 #include "linesight/line/line_tracker.h"
 #include "linesight/ranging/pipeline.h"
@@ -99,6 +100,12 @@ struct BaseStationOptions {
   // every this many frames (>= 1; about 5 ms each on a 752x480 pair).
   int health_every_frames = 30;
   RowAlignmentOptions row_alignment;
+  // Grab and match the next pair while this one is ranged, tracked, encoded and published (two
+  // stages on two threads: on 2 cores the single-threaded ranging no longer leaves one idle). The
+  // next pair is grabbed when the ranging has taken the previous one: at most one matched pair
+  // waits, so latency stays within two frame times and recorded sources lose no frame. false = one
+  // frame at a time.
+  bool overlap = true;
 
   void Check() const;
 };
@@ -173,7 +180,20 @@ class BaseStation {
 
  private:
   using Clock = std::chrono::steady_clock;
+  // The first half of a frame's work, handed from the grabbing stage to the ranging stage.
+  struct MatchedFrame {
+    StereoFrame frame;
+    RangingFrame ranged;
+    StageTimes stages;  // grab, rectify and match filled
+    Stopwatch in_hand;  // started when the pair was in hand
+  };
   void Loop();
+  void LoopSequential();
+  void LoopOverlapped();
+  bool WaitWhilePaused();
+  bool LastFrameReached(int64_t frame_index) const;
+  std::optional<MatchedFrame> GrabAndMatch();  // nullopt when the source has ended
+  void RangeAndPublish(MatchedFrame matched);
   JpegBytes DrawAnnotated(const cv::Mat& left_rectified, const nlohmann::json& result) const;
 
   std::unique_ptr<FrameSource> source_;

@@ -1,7 +1,9 @@
 #include "linesight/server/chain_bench.h"
 
 #include <algorithm>
+#include <chrono>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include <fmt/format.h>
@@ -20,6 +22,40 @@ double Median(std::vector<double> values) {
   const size_t mid = values.size() / 2;
   std::nth_element(values.begin(), values.begin() + long(mid), values.end());
   return values[mid];
+}
+
+// The station's own loop with its stages overlapped: the time between publications after the
+// warm-up, and the latency of each published frame.
+void MeasureOverlapped(const cv::Mat& left, const cv::Mat& right,
+                       const StereoCalibration& calibration, BaseStationOptions station_options,
+                       const ChainBenchOptions& options, ChainBenchRow* row) {
+  station_options.overlap = true;
+  station_options.max_frames = options.warmup + options.frames;
+  BaseStation station(RepeatedPairSource(left, right, calibration, "chain"), std::nullopt,
+                      station_options);
+  station.Start();
+  std::vector<double> intervals, latency;
+  std::optional<std::chrono::steady_clock::time_point> previous;
+  for (int64_t last = -1; station.running() || station.Snapshot().frame_index > last;) {
+    const int64_t index = station.WaitForFrame(last, 60.0);
+    if (index <= last) continue;
+    const auto now = std::chrono::steady_clock::now();
+    const BaseStationSnapshot snap = station.Snapshot();
+    if (index >= options.warmup) {
+      if (previous) {
+        intervals.push_back(std::chrono::duration<double, std::milli>(now - *previous).count() /
+                            double(index - last));
+      }
+      latency.push_back(snap.stages.latency);
+    }
+    previous = now;
+    last = index;
+  }
+  station.Stop();
+  if (!station.error().empty()) throw InputError("bench --chain: " + station.error());
+  row->overlapped_frame_ms = Median(intervals);
+  row->overlapped_fps = row->overlapped_frame_ms > 0 ? 1000.0 / row->overlapped_frame_ms : 0;
+  row->overlapped_latency_ms = Median(latency);
 }
 
 ChainBenchRow RunRow(const cv::Mat& left, const cv::Mat& right,
@@ -62,6 +98,7 @@ ChainBenchRow RunRow(const cv::Mat& left, const cv::Mat& right,
   row.match_mde_per_s =
       MdePerSecond(left.cols, left.rows, row.searched_disparities, row.median.match);
   row.page_faults_per_frame = double(faults) / options.frames;
+  MeasureOverlapped(left, right, calibration, station_options, options, &row);
   return row;
 }
 
@@ -93,7 +130,12 @@ ChainBenchReport RunChainBench(const cv::Mat& left, const cv::Mat& right,
   const auto sgbm = std::find_if(report.rows.begin(), report.rows.end(),
                                  [](const ChainBenchRow& r) { return r.method == "sgbm"; });
   if (sgbm != report.rows.end()) {
-    for (ChainBenchRow& r : report.rows) r.ratio_to_sgbm = sgbm->frame_ms / r.frame_ms;
+    for (ChainBenchRow& r : report.rows) {
+      r.ratio_to_sgbm = sgbm->frame_ms / r.frame_ms;
+      if (r.overlapped_frame_ms > 0) {
+        r.overlapped_ratio_to_sgbm = sgbm->overlapped_frame_ms / r.overlapped_frame_ms;
+      }
+    }
   }
   report.peak_rss_mb = double(ProcStatusKb("VmHWM")) / 1024.0;
   return report;
@@ -106,19 +148,23 @@ std::string ChainBenchMarkdown(const ChainBenchReport& r) {
       "{} warm-up frames discarded; medians per stage (ms); peak RSS {:.0f} MiB\n\n"
       "| method | disparities | grab | rectify | match | range | health | encode | frame ms | fps "
       "| "
-      "match MDE/s | page faults/frame | vs sgbm chain |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+      "match MDE/s | page faults/frame | vs sgbm chain | overlapped: frame ms | fps | latency ms "
+      "| vs sgbm |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       r.input, r.image_size.width, r.image_size.height, r.finder, r.cpu, r.hardware_threads,
       r.warmup, r.peak_rss_mb);
   for (const ChainBenchRow& row : r.rows) {
     text += fmt::format(
         "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | "
         "{:.0f} | "
-        "{:.0f} | {} |\n",
+        "{:.0f} | {} | {:.1f} | {:.1f} | {:.0f} | {} |\n",
         row.method, row.searched_disparities, row.median.grab, row.median.rectify, row.median.match,
         row.median.range, row.median.health, row.median.encode, row.frame_ms, row.fps,
         row.match_mde_per_s, row.page_faults_per_frame,
-        row.ratio_to_sgbm > 0 ? fmt::format("{:.2f}x", row.ratio_to_sgbm) : "-");
+        row.ratio_to_sgbm > 0 ? fmt::format("{:.2f}x", row.ratio_to_sgbm) : "-",
+        row.overlapped_frame_ms, row.overlapped_fps, row.overlapped_latency_ms,
+        row.overlapped_ratio_to_sgbm > 0 ? fmt::format("{:.2f}x", row.overlapped_ratio_to_sgbm)
+                                         : "-");
   }
   return text;
 }
@@ -134,7 +180,11 @@ nlohmann::json ChainBenchJson(const ChainBenchReport& r) {
                     {"fps", row.fps},
                     {"match_mde_per_s", row.match_mde_per_s},
                     {"page_faults_per_frame", row.page_faults_per_frame},
-                    {"ratio_to_sgbm", row.ratio_to_sgbm}});
+                    {"ratio_to_sgbm", row.ratio_to_sgbm},
+                    {"overlapped_frame_ms", row.overlapped_frame_ms},
+                    {"overlapped_fps", row.overlapped_fps},
+                    {"overlapped_latency_ms", row.overlapped_latency_ms},
+                    {"overlapped_ratio_to_sgbm", row.overlapped_ratio_to_sgbm}});
   }
   return {{"cpu", r.cpu},
           {"hardware_threads", r.hardware_threads},

@@ -3,7 +3,9 @@
 // page's images — stepped on one pair held in memory, per method in the same run, with each
 // stage's median time, frames per second, the matcher's MDE/s, minor page faults per frame (first
 // touches of fresh memory: large buffers allocated per frame show here) and the process's peak
-// memory. Ratios are against the row of OpenCV's StereoSGBM ("sgbm") run through the same chain.
+// memory; then the same through the station's loop with grabbing-and-matching overlapped with
+// ranging (frame interval, rate, latency). Ratios are against the row of OpenCV's StereoSGBM
+// ("sgbm") run through the same chain.
 #pragma once
 
 #include <functional>
@@ -40,6 +42,13 @@ struct ChainBenchRow {
   double match_mde_per_s = 0;        // W·H·searched disparities / median match time
   double page_faults_per_frame = 0;  // minor faults per timed frame (mean)
   double ratio_to_sgbm = 0;          // sgbm's frame_ms / this row's (0 without an sgbm row)
+  // The same frames through the station's own loop with its two stages overlapped
+  // (BaseStationOptions::overlap): median time between publications, its rate, and the median
+  // end-to-end latency (pair in hand to result published).
+  double overlapped_frame_ms = 0;
+  double overlapped_fps = 0;
+  double overlapped_latency_ms = 0;
+  double overlapped_ratio_to_sgbm = 0;  // sgbm's overlapped_frame_ms / this row's
 };
 
 struct ChainBenchReport {
