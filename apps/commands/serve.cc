@@ -102,6 +102,10 @@ int RunServe(int argc, char** argv) {
   app.add_option("--frames", options.max_frames,
                  "stop processing after N frames (0 = until the source ends); the page stays up")
       ->capture_default_str();
+  bool no_overlap = false;
+  app.add_flag("--no-overlap", no_overlap,
+               "process one frame at a time (default: grab and match the next pair while this one "
+               "is ranged and published)");
   app.add_option("--record-dir", options.record_dir,
                  "folder under which the page's record switch (POST /api/record) starts recordings "
                  "of the raw pairs and results, replayable with --source images:")
@@ -114,6 +118,7 @@ int RunServe(int argc, char** argv) {
   return RunCommand(app, argc, argv, [&] {
     for (const std::string& text : roi_texts) options.rois.push_back(ParseRoi(text));
     options.auto_detect = !no_auto;
+    options.overlap = !no_overlap;
     options.finder = ParseAutoFinder(finder);
     options.pipeline.params = ParseParams(raw_params);
     if (options.rois.empty() && !options.auto_detect) {
