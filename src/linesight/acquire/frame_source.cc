@@ -245,26 +245,31 @@ class CaptureSource final : public FrameSource {
   // damaged: an error naming the file, not a quiet end (a recording cut short by a full disk or
   // a dropped connection must not pass for a complete run).
   void CheckNotTruncated() {
-    for (size_t i = 0; i < captures_.size(); ++i) {
-      const double announced = captures_[i].get(cv::CAP_PROP_FRAME_COUNT);
-      if (announced > 0 && double(pass_frames_) + 1 < announced) {
-        throw InputError(fmt::format(
-            "source '{}': video '{}' ended after {} of the {} frames its header announces "
-            "(truncated or damaged)",
-            spec_, names_[i], pass_frames_, int64_t(announced)));
-      }
+    const size_t i = ended_;  // the file that delivered no frame
+    const double announced = captures_[i].get(cv::CAP_PROP_FRAME_COUNT);
+    if (announced > 0 && double(pass_frames_) + 1 < announced) {
+      throw InputError(fmt::format(
+          "source '{}': video '{}' ended after {} of the {} frames its header announces "
+          "(truncated or damaged)",
+          spec_, names_[i], pass_frames_, int64_t(announced)));
     }
   }
 
   std::optional<StereoFrame> Grab() {
     // grab() both first, then retrieve(): the two cameras' exposures are as close in time as
     // V4L2 allows without a hardware trigger.
-    for (cv::VideoCapture& c : captures_) {
-      if (!c.grab()) return std::nullopt;
+    for (size_t i = 0; i < captures_.size(); ++i) {
+      if (!captures_[i].grab()) {
+        ended_ = i;
+        return std::nullopt;
+      }
     }
     std::vector<cv::Mat> images(captures_.size());
     for (size_t i = 0; i < captures_.size(); ++i) {
-      if (!captures_[i].retrieve(images[i]) || images[i].empty()) return std::nullopt;
+      if (!captures_[i].retrieve(images[i]) || images[i].empty()) {
+        ended_ = i;
+        return std::nullopt;
+      }
     }
     StereoFrame frame;
     if (images.size() == 1) {
@@ -286,6 +291,7 @@ class CaptureSource final : public FrameSource {
   std::string description_;
   int64_t next_ = 0;
   int64_t pass_frames_ = 0;  // frames delivered since the files' start (this pass)
+  size_t ended_ = 0;         // the capture that delivered no frame last
   Clock::time_point start_ = Clock::now();
 };
 

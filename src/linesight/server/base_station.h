@@ -5,8 +5,9 @@
 // along the line, tracked by LineTracker with approach rate and time to reach; an alarm when the
 // nearest is within the alarm distance along the line), or for rigs that do not ride a line every
 // region thicker than a conductor at its own depth (RangeAuto, filtered by DistanceTracker) - and
-// publishes the newest result; the server hands it to the web page (web/index.html, embedded) and
-// to any client through a JSON API:
+// publishes the newest result (grabbing and matching the next pair overlap with ranging the
+// previous one: BaseStationOptions::overlap); the server hands it to the web page (web/index.html,
+// embedded) and to any client through a JSON API:
 //
 //   GET  /                    the base-station page
 //   GET  /api/status          source, calibration summary, frame index, fps, latency, settings
