@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "commands.h"
+#include "linesight/core/process_memory.h"
 
 namespace {
 
@@ -52,6 +53,7 @@ void PrintUsage(std::FILE* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  linesight::RetainFreedMemory();  // frame loops reuse their freed buffers (core/process_memory.h)
   if (argc < 2) {
     PrintUsage(stderr);
     return 2;
