@@ -261,7 +261,8 @@ void BuildPolyline(ConductorCurve* k, const StereoGeometry& g) {
 // Median 3D distance of a's observed polyline points from curve b (m).
 double MedianSeparation(const ConductorCurve& a, const ConductorCurve& b) {
   std::vector<double> gaps;
-  for (const cv::Point3d& x : a.points) gaps.push_back(LocateOnCurve(b, x).offset_m);
+  const CurveLocator on_b(b);
+  for (const cv::Point3d& x : a.points) gaps.push_back(on_b.Locate(x).offset_m);
   std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
   return gaps[gaps.size() / 2];
 }
@@ -467,6 +468,52 @@ LinePosition LocateOnCurve(const ConductorCurve& k, const cv::Point3d& x) {
 }
 
 LinePosition ConductorModel::Locate(const cv::Point3d& x) const { return LocateOnCurve(line, x); }
+
+CurveLocator::CurveLocator(const ConductorCurve& k) {
+  const size_t n = k.points.size();
+  for (size_t i = 0; i + 1 < n; ++i) {
+    Segment s;
+    s.a = k.points[i];
+    s.ab = k.points[i + 1] - s.a;
+    s.len2 = s.ab.dot(s.ab);
+    s.len = std::sqrt(s.len2);
+    s.arc = k.arcs[i];
+    s.lo = i == 0 ? -1e9 : 0.0;
+    s.hi = i + 2 == n ? 1e9 : 1.0;
+    s.tangent = cv::Vec3d(s.ab.x / s.len, s.ab.y / s.len, s.ab.z / s.len);
+    s.down = cv::Vec3d(0, 1, 0) - s.tangent[1] * s.tangent;
+    s.down *= 1.0 / cv::norm(s.down);
+    s.side = s.tangent.cross(s.down);
+    segments_.push_back(s);
+  }
+}
+
+LinePosition CurveLocator::Locate(const cv::Point3d& x) const {
+  LinePosition best;
+  double best_dist = std::numeric_limits<double>::infinity();
+  const Segment* nearest = nullptr;
+  double nearest_f = 0;
+  cv::Point3d nearest_foot;
+  for (const Segment& s : segments_) {
+    const double f = std::clamp((x - s.a).dot(s.ab) / s.len2, s.lo, s.hi);
+    const cv::Point3d foot = s.a + f * s.ab;
+    const double dist = cv::norm(x - foot);
+    if (dist < best_dist) {
+      best_dist = dist;
+      nearest = &s;
+      nearest_f = f;
+      nearest_foot = foot;
+    }
+  }
+  if (nearest == nullptr) return best;
+  best.arc_m = nearest->arc + nearest_f * nearest->len;
+  best.offset_m = best_dist;
+  const cv::Vec3d e(x.x - nearest_foot.x, x.y - nearest_foot.y, x.z - nearest_foot.z);
+  best.down_m = e.dot(nearest->down);
+  best.side_m = e.dot(nearest->side);
+  best.tangent = nearest->tangent;
+  return best;
+}
 
 nlohmann::json ConductorModel::ToJson() const {
   auto curve_json = [](const ConductorCurve& k) {

@@ -132,4 +132,22 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
 // Position of X relative to a curve (see ConductorModel::Locate).
 LinePosition LocateOnCurve(const ConductorCurve& curve, const cv::Point3d& x);
 
+// LocateOnCurve for many points on one curve: each segment's frame (length, tangent, down, side)
+// is worked out once instead of for every point. The result is LocateOnCurve's bit for bit (the
+// same arithmetic; conductor_test checks it on awkward curves).
+class CurveLocator {
+ public:
+  explicit CurveLocator(const ConductorCurve& curve);
+  LinePosition Locate(const cv::Point3d& x) const;
+
+ private:
+  struct Segment {
+    cv::Point3d a, ab;
+    double len2 = 0, len = 0, arc = 0;
+    double lo = 0, hi = 0;  // clamp of the foot's fraction (the end segments extend the line)
+    cv::Vec3d tangent, down, side;
+  };
+  std::vector<Segment> segments_;
+};
+
 }  // namespace linesight

@@ -1,6 +1,8 @@
 #include "linesight/line/conductor.h"
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 
@@ -156,6 +158,48 @@ TEST(ConductorTest, RejectsBadOptionsAndMaps) {
   o.max_depth_m = 0.1;
   EXPECT_THROW(FitConductor(EmptyDisparity(), SyntheticGeometry(), o), OptionError);
   EXPECT_THROW(FitConductor(cv::Mat(10, 10, CV_8UC1), SyntheticGeometry(), {}), InputError);
+}
+
+// CurveLocator is LocateOnCurve with each segment's frame worked out once: it must give the same
+// bits on awkward curves (2 points, a kink, near-duplicate points, a vertical segment, a long
+// sagging polyline) for points beside, beyond and behind them.
+TEST(CurveLocatorTest, EqualsLocateOnCurveBitForBit) {
+  cv::RNG rng(11);
+  std::vector<std::vector<cv::Point3d>> polylines = {
+      {{0, 0, 1}, {0.1, 0.02, 3}},
+      {{0, 0, 1}, {0.2, 0.1, 2}, {-0.1, 0.3, 2.5}},
+      {{0, 0, 1}, {1e-7, 0, 1 + 1e-7}, {0.05, 0.01, 2}},
+      {{0.1, -0.5, 2}, {0.1, 0.5, 2}, {0.2, 0.6, 3}}};
+  std::vector<cv::Point3d> sag;
+  for (int i = 0; i < 61; ++i) {
+    const double t = i / 60.0;
+    sag.push_back({0.3 * t, 0.2 * (t - 0.5) * (t - 0.5), 0.5 + 7.5 * t});
+  }
+  polylines.push_back(sag);
+  for (const auto& points : polylines) {
+    ConductorCurve curve;
+    curve.points = points;
+    double arc = -0.3;
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (i > 0) arc += cv::norm(points[i] - points[i - 1]);
+      curve.arcs.push_back(arc);
+    }
+    const CurveLocator locator(curve);
+    for (int k = 0; k < 2000; ++k) {
+      const cv::Point3d x(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 9.0));
+      const LinePosition want = LocateOnCurve(curve, x), got = locator.Locate(x);
+      // Bits, not values: a vertical segment has no "down" and both give the same NaN there.
+      const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+      ASSERT_EQ(bits(got.arc_m), bits(want.arc_m)) << points.size() << " points, k " << k;
+      ASSERT_EQ(bits(got.offset_m), bits(want.offset_m));
+      ASSERT_EQ(bits(got.down_m), bits(want.down_m));
+      ASSERT_EQ(bits(got.side_m), bits(want.side_m));
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(bits(got.tangent[c]), bits(want.tangent[c]));
+    }
+  }
+  const LinePosition none = CurveLocator(ConductorCurve{}).Locate({0, 0, 1});
+  EXPECT_EQ(none.arc_m, 0.0);
+  EXPECT_EQ(none.offset_m, 0.0);
 }
 
 }  // namespace

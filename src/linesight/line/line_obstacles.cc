@@ -71,6 +71,7 @@ std::vector<LinePoint> CorridorPoints(const cv::Mat& disparity, const cv::Mat& b
                                       const LineObstacleOptions& o, int* body_pixels) {
   std::vector<LinePoint> points;
   *body_pixels = 0;
+  const CurveLocator locator(model.line);
   for (int y = 0; y < disparity.rows; ++y) {
     const float* d = disparity.ptr<float>(y);
     const std::uint8_t* b = bodies.ptr<std::uint8_t>(y);
@@ -78,7 +79,7 @@ std::vector<LinePoint> CorridorPoints(const cv::Mat& disparity, const cv::Mat& b
       if (b[x] == 0 || !IsValidDisparity(d[x]) || d[x] + g.disparity_offset_px <= 0) continue;
       ++*body_pixels;
       const double z = g.DepthFromDisparity(d[x]);
-      const LinePosition at = model.Locate(BackProjectAt(g, x, y, z));
+      const LinePosition at = locator.Locate(BackProjectAt(g, x, y, z));
       if (std::fabs(at.side_m) > o.corridor_side_m || at.down_m < -o.corridor_above_m ||
           at.down_m > o.corridor_below_m || at.arc_m < -0.5 || at.arc_m > o.max_arc_m) {
         continue;
