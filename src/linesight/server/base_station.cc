@@ -225,7 +225,9 @@ void BaseStation::LoopOverlapped() {
     grabber.join();
   };
   try {
-    for (;;) {
+    // A pause holds at the frame being ranged: a matched pair waiting for the ranging is not taken
+    // until the station resumes.
+    while (WaitWhilePaused()) {
       std::optional<MatchedFrame> matched;
       {
         std::unique_lock lock(handoff_mutex);
