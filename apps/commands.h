@@ -24,5 +24,6 @@ int RunEvalPlates(int argc, char** argv);     // `linesight eval plates`, dispat
 int RunEvalSequences(int argc, char** argv);  // `linesight eval sequences`, dispatched by eval.cc
 int RunServe(int argc, char** argv);
 int RunAcquire(int argc, char** argv);
+int RunBatch(int argc, char** argv);
 
 }  // namespace linesight::cli

@@ -40,6 +40,8 @@ constexpr Subcommand kSubcommands[] = {
      "base station: live ranging of a camera / video / synthetic stream, web page + JSON API"},
     {"acquire", linesight::cli::RunAcquire,
      "record stereo pairs from a camera, video or the synthetic scene (e.g. calibration views)"},
+    {"batch", linesight::cli::RunBatch,
+     "disparity / ranging of many recorded pairs in one process; resumable, shardable (Slurm)"},
 };
 
 void PrintUsage(std::FILE* out) {
