@@ -11,6 +11,9 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev  # libFuzzer targets (cmake -DLINESIGHT_FUZZ=ON, see src/linesight/io)
   python3-numpy python3-opencv
+  python3-dev pybind11-dev python3-pytest  # the Python module (cmake -DLINESIGHT_PYTHON=ON) and its pytest suite
+  slurm-wlm munge  # the batch command's Slurm array test (scripts/slurm_array_test.sh) on a one-node cluster
+  dpkg-dev file  # CPack's .deb generator (dpkg-shlibdeps) on the package test
   chromium  # the base-station page's browser tests (src/linesight/server/page_browser_test.mjs)
 )
 
