@@ -5,6 +5,8 @@
 #     DEPS      OpenCV::core fmt::fmt         # public link dependencies
 #     TESTS     error_test.cc                 # -> one gtest executable linesight_core_test
 #     BENCHMARKS progress_benchmark.cc)       # -> one benchmark executable linesight_core_benchmark
+include(GNUInstallDirs)
+
 function(linesight_target_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
                                            -Wno-missing-field-initializers)
@@ -47,11 +49,27 @@ function(linesight_add_module name)
   set(lib linesight_${name})
   add_library(${lib} STATIC ${M_SOURCES})
   add_library(linesight::${name} ALIAS ${lib})
-  target_include_directories(${lib} PUBLIC ${PROJECT_SOURCE_DIR}/src)
+  target_include_directories(${lib} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>
+                                           $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${lib} PUBLIC ${M_DEPS})
+  target_compile_features(${lib} PUBLIC cxx_std_20)  # the headers need C++20 (consumers of the package too)
+  # The data folders of this build machine, for the tests and the CLI's defaults: never part of the
+  # installed package's interface.
   target_compile_definitions(${lib} PUBLIC
-    LINESIGHT_SHARED_DATA_DIR="${LINESIGHT_SHARED_DATA_DIR}"
-    LINESIGHT_OPENCV_DATA_DIR="${LINESIGHT_OPENCV_DATA_DIR}")
+    $<BUILD_INTERFACE:LINESIGHT_SHARED_DATA_DIR="${LINESIGHT_SHARED_DATA_DIR}">
+    $<BUILD_INTERFACE:LINESIGHT_OPENCV_DATA_DIR="${LINESIGHT_OPENCV_DATA_DIR}">)
+  # Installed (cmake/linesight_install.cmake) as linesight::${name} with the folder's public headers: not
+  # the tests' helpers (*_test_util.h), the sources' own (*_internal.h) or the headers of test-only sources.
+  file(GLOB headers CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.h)
+  list(FILTER headers EXCLUDE REGEX "_(test_util|internal)\\.h$")
+  foreach(src ${M_TESTS} ${M_BENCHMARKS})
+    if(NOT src IN_LIST M_SOURCES)
+      string(REGEX REPLACE "\\.cc$" ".h" header ${CMAKE_CURRENT_SOURCE_DIR}/${src})
+      list(REMOVE_ITEM headers ${header})
+    endif()
+  endforeach()
+  set_target_properties(${lib} PROPERTIES EXPORT_NAME ${name} PUBLIC_HEADER "${headers}")
+  set_property(GLOBAL APPEND PROPERTY LINESIGHT_MODULES ${name})
   linesight_target_warnings(${lib})
   linesight_unity_build(${lib})
 
