@@ -24,7 +24,7 @@ fi
 
 echo "== release build (warnings as errors) [$(date -u +%T)]"
 cmake -S . -B build -G Ninja "${LAUNCHER[@]}" -DCMAKE_BUILD_TYPE=Release -DLINESIGHT_WERROR=ON \
-  -DLINESIGHT_UNITY_BUILD=ON >/dev/null
+  -DLINESIGHT_UNITY_BUILD=ON -DLINESIGHT_PYTHON=ON >/dev/null
 cmake --build build -j"$JOBS"
 
 echo "== tests [$(date -u +%T)]"
