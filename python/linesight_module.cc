@@ -202,10 +202,7 @@ class Matcher {
   MatchResult Compute(const py::array& left, const py::array& right) {
     const cv::Mat l = ImageFromArray(left, "left");
     const cv::Mat r = ImageFromArray(right, "right");
-    if (l.size() != r.size()) {
-      throw InputError(fmt::format("left is {}x{} but right is {}x{}: a pair has one size", l.cols,
-                                   l.rows, r.cols, r.rows));
-    }
+    CheckSameSize(l, "left", r, "right");
     MatchResult result;
     {
       py::gil_scoped_release release;
@@ -242,10 +239,7 @@ class Pipeline {
                  const std::vector<std::vector<int>>& rois, bool automatic) {
     const cv::Mat l = ImageFromArray(left, "left");
     const cv::Mat r = ImageFromArray(right, "right");
-    if (l.size() != r.size()) {
-      throw InputError(fmt::format("left is {}x{} but right is {}x{}: a pair has one size", l.cols,
-                                   l.rows, r.cols, r.rows));
-    }
+    CheckSameSize(l, "left", r, "right");
     CheckCalibrationMatchesImage(pipeline_->rectified_calibration(), l.size(), "calibration");
     std::vector<cv::Rect> boxes;
     for (const auto& roi : rois) {
@@ -283,15 +277,7 @@ class Pipeline {
     out["right_rectified"] = ArrayFromMat(frame.right_rectified);
     return out;
   }
-  py::object Settings() const {
-    nlohmann::json j;
-    j["method"] = pipeline_->method();
-    j["matcher"] = pipeline_->matcher().Settings();
-    j["ranging_settings"] = RangingSettingsTable().ToJson(pipeline_->options());
-    const DisparityRange range = pipeline_->disparity_range();
-    j["disparity_range"] = {range.min_disparity, range.max_disparity()};
-    return FromJson(j);
-  }
+  py::object Settings() const { return FromJson(RangingChainSettings(*pipeline_)); }
   const StereoCalibration& Calibration() const { return pipeline_->rectified_calibration(); }
   void ResetConductor() { conductor_ = {}; }
 

@@ -85,14 +85,10 @@ int RunRange(int argc, char** argv) {
         range.max_disparity(), searched.min_disparity, searched.max_disparity(), match_ms);
     out << fmt::format("{:>3}  {:>6}  {:<20} {:>10} {:>9} {:>7}  {}\n", "#", "source", "box",
                        "distance_m", "sigma_m", "valid%", "note");
-    nlohmann::json report;
+    nlohmann::json report = RangingChainSettings(pipeline);
     report["calibration"] = calib_path;
-    report["method"] = pipeline.method();
-    report["matcher"] = pipeline.matcher().Settings();
-    report["ranging_settings"] = RangingSettingsTable().ToJson(pipeline.options());
     report["min_depth_m"] = options.min_depth_m;
     report["max_depth_m"] = options.max_depth_m;
-    report["disparity_range"] = {range.min_disparity, range.max_disparity()};
     report["distance_definition"] =
         "depth of the obstacle's nearest visible surface along the rectified left optical axis (m)";
     report["obstacles"] = nlohmann::json::array();

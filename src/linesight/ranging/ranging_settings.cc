@@ -77,4 +77,12 @@ void ApplyRangingSettings(std::string_view flag, const std::vector<std::string>&
   RangingSettingsTable().Apply(flag, ParseKeyValues(flag, entries), options);
 }
 
+nlohmann::json RangingChainSettings(const RangingPipeline& pipeline) {
+  const DisparityRange range = pipeline.disparity_range();
+  return {{"method", pipeline.method()},
+          {"matcher", pipeline.matcher().Settings()},
+          {"ranging_settings", RangingSettingsTable().ToJson(pipeline.options())},
+          {"disparity_range", {range.min_disparity, range.max_disparity()}}};
+}
+
 }  // namespace linesight

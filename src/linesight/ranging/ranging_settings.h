@@ -20,4 +20,8 @@ const OptionTable<RangingPipelineOptions>& RangingSettingsTable();
 void ApplyRangingSettings(std::string_view flag, const std::vector<std::string>& entries,
                           RangingPipelineOptions* options);
 
+// What a report records of the chain it ran: {method, matcher (its settings), ranging_settings
+// (every key of the table), disparity_range [min, max]}.
+nlohmann::json RangingChainSettings(const RangingPipeline& pipeline);
+
 }  // namespace linesight
