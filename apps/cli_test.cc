@@ -162,6 +162,34 @@ TEST_F(CliTest, DisparityMissingFileNamesItAndWritesNothing) {
   EXPECT_FALSE(fs::exists(dir_ / "d.pfm"));
 }
 
+TEST_F(CliTest, BatchProcessesAManifestResumesAndNamesAFailedPair) {
+  WritePair(dir_ / "l.png", dir_ / "r.png");
+  {
+    std::ofstream manifest(dir_ / "pairs.txt");
+    manifest
+        << "# two pairs, one without its right image\nl.png r.png first\nl.png gone.png second\n";
+  }
+  const std::string batch = "batch --manifest " + (dir_ / "pairs.txt").string() + " --out " +
+                            (dir_ / "out").string() + " --method sgbm --num-disp 24 --threads 1";
+  const RunResult r = Run(batch);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("gone.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1 done, 0 skipped, 1 failed"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir_ / "out" / "first.pfm"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "second.pfm"));
+  EXPECT_NE(Slurp(dir_ / "out" / "summary.json").find("\"failed\": 1"), std::string::npos);
+  // Once the image is there the batch resumes: the finished pair is skipped.
+  fs::copy_file(dir_ / "r.png", dir_ / "gone.png");
+  const RunResult again = Run(batch);
+  EXPECT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.err.find("1 done, 1 skipped, 0 failed"), std::string::npos) << again.err;
+  EXPECT_EQ(Run(batch + " --shard 2/2").exit_code, 2);
+  EXPECT_EQ(
+      Run("batch --manifest " + (dir_ / "nope.txt").string() + " --out " + (dir_ / "out").string())
+          .exit_code,
+      1);
+}
+
 TEST_F(CliTest, DisparityUnreadableImageIsRuntimeError) {
   WritePair(dir_ / "l.png", dir_ / "r.png");
   std::ofstream(dir_ / "junk.png") << "this is not a PNG";

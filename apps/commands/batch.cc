@@ -20,14 +20,21 @@ int RunBatch(int argc, char** argv) {
       "(or a Slurm array task's environment) processes one shard, --merge joins the shards' "
       "summaries.",
       "batch"};
-  std::string manifest_path, out_dir, calib_path, shard_text;
+  std::string manifest_path, left_glob, right_glob, out_dir, calib_path, shard_text;
   std::vector<std::string> raw_params, ranging_settings;
   bool merge = false;
   BatchOptions options;
-  app.add_option("--manifest", manifest_path,
-                 "pairs, one per line: <left> <right> [<name>] (# comments; paths relative to "
-                 "the manifest's folder)")
-      ->required();
+  auto* manifest = app.add_option(
+      "--manifest", manifest_path,
+      "pairs, one per line: <left> <right> [<name>] (# comments; paths relative to the "
+      "manifest's folder)");
+  auto* left = app.add_option("--left", left_glob,
+                              "instead of --manifest: left images, a glob (quote it), paired in "
+                              "sorted order with --right's");
+  auto* right = app.add_option("--right", right_glob, "right images, a glob");
+  manifest->excludes(left)->excludes(right);
+  left->needs(right);
+  right->needs(left);
   app.add_option("--out", out_dir, "output folder: <name>.pfm, <name>.json, summary*.json")
       ->required();
   app.add_option("--calib", calib_path,
@@ -60,7 +67,12 @@ int RunBatch(int argc, char** argv) {
   app.add_flag("--merge", merge,
                "merge the shard summaries in --out into summary.json (processes nothing)");
   return RunCommand(app, argc, argv, [&] {
-    const std::vector<BatchPair> pairs = ReadBatchManifest(manifest_path);
+    if (manifest_path.empty() && left_glob.empty()) {
+      throw UsageError("give --manifest FILE, or --left and --right globs");
+    }
+    const std::vector<BatchPair> pairs = manifest_path.empty()
+                                             ? BatchPairsFromGlobs(left_glob, right_glob)
+                                             : ReadBatchManifest(manifest_path);
     options.out = out_dir;
     if (merge) {
       const nlohmann::json summary = MergeBatchSummaries(pairs, options.out);

@@ -52,7 +52,7 @@ def test_matcher_params_are_checked_with_the_library_messages(aloe):
     assert issubclass(linesight.InputError, ValueError)
     with pytest.raises(linesight.InputError, match="uint8"):
         linesight.compute_disparity(left.astype(np.float32), right)
-    with pytest.raises(linesight.InputError, match="one size"):
+    with pytest.raises(linesight.InputError, match="same size"):
         linesight.compute_disparity(left, right[:-1])
     with pytest.raises(linesight.InputError, match="/nonexistent.png"):
         linesight.read_image("/nonexistent.png")
@@ -112,6 +112,19 @@ def test_rectification_point_cloud_and_depth_agree_with_the_truth(scene, tmp_pat
     np.testing.assert_allclose(again.as_dict()["P1"], calibration.as_dict()["P1"])
     linesight.write_pfm(tmp_path / "d.pfm", truth)
     assert linesight.read_pfm(tmp_path / "d.pfm").tobytes() == truth.tobytes()
+
+
+def test_calibration_from_images_finds_the_boards_of_opencvs_sample_pairs(aloe):
+    data = aloe[0].parent
+    lefts = [linesight.read_image(data / f"left0{i}.jpg") for i in range(1, 7)]
+    rights = [linesight.read_image(data / f"right0{i}.jpg") for i in range(1, 7)]
+    found = linesight.detect_pattern(lefts[0], "chessboard:9x6:0.025")
+    assert found["found"] and found["pixels"].shape == (54, 2)
+    calibration, report = linesight.calibrate_stereo(lefts, rights, "chessboard:9x6:0.025")
+    assert calibration.image_size == (640, 480)
+    # OpenCV's stereo_calib sample: a baseline of about 3.3 squares.
+    assert 0.07 < calibration.baseline_m < 0.095
+    assert report["rms_px"]["stereo"] < 1.0
 
 
 def test_calibration_from_corners_recovers_the_rendered_rig():

@@ -72,12 +72,8 @@ class PairProcessor {
       CheckCalibrationMatchesImage(*options_.calibration, left.size(), options_.calibration_path);
       const RangingFrame frame = pipeline_->Process(left, right);
       disparity = frame.disparity;
-      const DisparityRange range = pipeline_->disparity_range();
+      report.update(RangingChainSettings(*pipeline_));
       report["calibration"] = options_.calibration_path;
-      report["method"] = pipeline_->method();
-      report["matcher"] = pipeline_->matcher().Settings();
-      report["ranging_settings"] = RangingSettingsTable().ToJson(pipeline_->options());
-      report["disparity_range"] = {range.min_disparity, range.max_disparity()};
       report["obstacles"] = nlohmann::json::array();
       for (const RangeResult& r : pipeline_->RangeAuto(frame)) {
         report["obstacles"].push_back(RangeResultToJson(r));
@@ -97,6 +93,24 @@ class PairProcessor {
   std::optional<RangingPipeline> pipeline_;
   std::unique_ptr<StereoMatcher> matcher_;
 };
+
+// Appends `pair` after checking that its name makes output files of its own (`where` names the
+// manifest line or the glob in the error).
+void AddPair(BatchPair pair, const std::string& where, std::vector<BatchPair>* pairs,
+             std::set<std::string>* names) {
+  if (pair.name.empty() || pair.name.find('/') != std::string::npos || pair.name == "." ||
+      pair.name == ".." || pair.name.starts_with("summary")) {
+    throw InputError(
+        fmt::format("{}: name '{}' cannot name an output file (no '/', not '.', '..' or summary*)",
+                    where, pair.name));
+  }
+  if (!names->insert(pair.name).second) {
+    throw InputError(fmt::format(
+        "{}: name '{}' is used by an earlier pair (name the pairs in a manifest's third field)",
+        where, pair.name));
+  }
+  pairs->push_back(std::move(pair));
+}
 
 }  // namespace
 
@@ -123,21 +137,25 @@ std::vector<BatchPair> ParseBatchManifest(const std::string& text, const fs::pat
     pair.left = (base / fields[0]).lexically_normal();
     pair.right = (base / fields[1]).lexically_normal();
     pair.name = fields.size() == 3 ? fields[2] : fs::path(fields[0]).stem().string();
-    if (pair.name.empty() || pair.name.find('/') != std::string::npos || pair.name == "." ||
-        pair.name == ".." || pair.name.starts_with("summary")) {
-      throw InputError(fmt::format(
-          "{}:{}: name '{}' cannot name an output file (no '/', not '.', '..' or summary*)",
-          manifest_path.string(), number, pair.name));
-    }
-    if (!names.insert(pair.name).second) {
-      throw InputError(
-          fmt::format("{}:{}: name '{}' is used by an earlier pair (give each pair "
-                      "a unique name as the third field)",
-                      manifest_path.string(), number, pair.name));
-    }
-    pairs.push_back(std::move(pair));
+    AddPair(std::move(pair), fmt::format("{}:{}", manifest_path.string(), number), &pairs, &names);
   }
   if (pairs.empty()) throw InputError(fmt::format("{}: lists no pairs", manifest_path.string()));
+  return pairs;
+}
+
+std::vector<BatchPair> BatchPairsFromGlobs(const std::string& left_glob,
+                                           const std::string& right_glob) {
+  const std::vector<fs::path> lefts = ExpandGlob(left_glob), rights = ExpandGlob(right_glob);
+  if (lefts.size() != rights.size()) {
+    throw InputError(fmt::format("'{}' matches {} files but '{}' matches {}: pairs need one each",
+                                 left_glob, lefts.size(), right_glob, rights.size()));
+  }
+  std::vector<BatchPair> pairs;
+  std::set<std::string> names;
+  for (size_t i = 0; i < lefts.size(); ++i) {
+    AddPair({lefts[i].stem().string(), lefts[i], rights[i], lefts[i].string(), rights[i].string()},
+            fmt::format("--left '{}'", left_glob), &pairs, &names);
+  }
   return pairs;
 }
 

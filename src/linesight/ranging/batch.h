@@ -38,6 +38,11 @@ std::vector<BatchPair> ReadBatchManifest(const std::filesystem::path& path);
 std::vector<BatchPair> ParseBatchManifest(const std::string& text,
                                           const std::filesystem::path& manifest_path);
 
+// The pairs of two globs (ExpandGlob), matched in sorted order, named by the left files' stems.
+// Throws InputError when the globs match different numbers of files or a name repeats.
+std::vector<BatchPair> BatchPairsFromGlobs(const std::string& left_glob,
+                                           const std::string& right_glob);
+
 // One shard of N: pairs whose index i has i mod count == index.
 struct BatchShard {
   int index = 0;

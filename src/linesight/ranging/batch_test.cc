@@ -1,5 +1,7 @@
 #include "linesight/ranging/batch.h"
 
+#include <unistd.h>
+
 #include <map>
 
 #include <gtest/gtest.h>
@@ -40,11 +42,29 @@ TEST(BatchManifestTest, BadLinesNameTheFileAndLine) {
   ExpectInputError([] { ParseBatchManifest("a.png b.png\nc.png\n", "m.txt"); },
                    {"m.txt:2", "<left> <right> [<name>]", "1 field"});
   ExpectInputError([] { ParseBatchManifest("a.png b.png x\nc.png d.png x\n", "m.txt"); },
-                   {"m.txt:2", "'x'", "unique"});
+                   {"m.txt:2", "'x'", "earlier pair"});
   ExpectInputError([] { ParseBatchManifest("a.png b.png summary\n", "m.txt"); },
                    {"m.txt:1", "'summary'"});
   ExpectInputError([] { ParseBatchManifest("# nothing\n\n", "m.txt"); }, {"m.txt", "no pairs"});
   ExpectInputError([] { ReadBatchManifest("/nonexistent/m.txt"); }, {"/nonexistent/m.txt"});
+}
+
+TEST(BatchManifestTest, GlobsPairInSortedOrder) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("linesight_batch_globs_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  for (const char* f : {"l_2.png", "l_1.png", "r_1.png", "r_2.png", "r_3.png"}) {
+    WriteTextAtomic(dir / f, "");
+  }
+  const auto pairs = BatchPairsFromGlobs((dir / "l_*.png").string(), (dir / "r_[12].png").string());
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].name, "l_1");
+  EXPECT_EQ(pairs[0].right, dir / "r_1.png");
+  EXPECT_EQ(pairs[1].left, dir / "l_2.png");
+  ExpectInputError(
+      [&] { BatchPairsFromGlobs((dir / "l_*.png").string(), (dir / "r_*.png").string()); },
+      {"matches 2 files", "matches 3"});
+  fs::remove_all(dir);
 }
 
 TEST(BatchShardTest, ParsesShardsAndSlurmArrays) {
