@@ -136,10 +136,17 @@ try {
   // Pause holds the frame; resume moves on.
   await page.click("#pause");
   await until("the pause", async () => (await api("/api/status")).paused === true, 5000);
-  // A frame already in the pipeline is still published; then nothing moves.
+  // A frame already being ranged is still published (on a loaded machine that can take longer than
+  // the last frame's processing time), so the frame number is read until it stays put for a frame
+  // period; then nothing may move. Without the pause it never stays put.
   const perFrameMs = Math.max(500, 2 * (await api("/api/status")).process_ms);
-  await sleep(perFrameMs);
-  const held = (await api("/api/status")).frame;
+  let held = (await api("/api/status")).frame;
+  for (const settleBy = Date.now() + 15000; Date.now() < settleBy; ) {
+    await sleep(perFrameMs);
+    const frame = (await api("/api/status")).frame;
+    if (frame === held) break;
+    held = frame;
+  }
   await sleep(perFrameMs);
   const after = (await api("/api/status")).frame, button = await page.textContent("#pause");
   check(after === held && button === "resume", `pause holds frame ${held} (then ${after}; button "${button}")`);
