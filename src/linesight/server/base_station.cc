@@ -145,6 +145,11 @@ void BaseStation::Loop() {
   published_.notify_all();
 }
 
+bool BaseStation::Paused() const {
+  std::lock_guard lock(mutex_);
+  return paused_;
+}
+
 // Waits while paused; false when asked to stop.
 bool BaseStation::WaitWhilePaused() {
   std::unique_lock lock(mutex_);
@@ -225,8 +230,8 @@ void BaseStation::LoopOverlapped() {
     grabber.join();
   };
   try {
-    // A pause holds at the frame being ranged: a matched pair waiting for the ranging is not taken
-    // until the station resumes.
+    // A pause holds at the frame being ranged: a matched pair waiting for the ranging, also one
+    // whose matching ends after the pause, is not taken until the station resumes.
     while (WaitWhilePaused()) {
       std::optional<MatchedFrame> matched;
       {
@@ -236,6 +241,7 @@ void BaseStation::LoopOverlapped() {
           handoff_changed.wait_for(lock, std::chrono::milliseconds(100));
         }
         if (!handoff) break;  // the grabber ended (source ended or failed) or a stop was asked
+        if (Paused()) continue;
         matched = std::move(handoff);
         handoff.reset();
       }

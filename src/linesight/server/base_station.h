@@ -191,6 +191,7 @@ class BaseStation {
   void Loop();
   void LoopSequential();
   void LoopOverlapped();
+  bool Paused() const;
   bool WaitWhilePaused();
   bool LastFrameReached(int64_t frame_index) const;
   std::optional<MatchedFrame> GrabAndMatch();  // nullopt when the source has ended
