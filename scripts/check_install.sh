@@ -47,8 +47,9 @@ fi
 
 # With the Python module built (-DLINESIGHT_PYTHON=ON), the installed package imports from the prefix alone.
 if compgen -G "$build/python/linesight/_core*.so" >/dev/null; then
-  site=$prefix/lib/python3/dist-packages
-  [ -f "$site/linesight/__init__.py" ] || fail "the Python package is not installed in $site"
+  init=$(find "$prefix/lib" -path '*/dist-packages/linesight/__init__.py' | head -n 1)
+  [ -n "$init" ] || fail "the Python package is not installed under $prefix/lib/python3*/dist-packages"
+  site=$(dirname "$(dirname "$init")")
   out=$(cd "$work" && PYTHONPATH=$site /usr/bin/python3 -c \
     'import linesight; print(linesight.__file__, len(linesight.matchers()), "matchers")') ||
     fail "import linesight from $site failed"
