@@ -436,35 +436,7 @@ double ConductorCurve::DisparityAt(double tau) const {
 }
 
 LinePosition LocateOnCurve(const ConductorCurve& k, const cv::Point3d& x) {
-  LinePosition best;
-  double best_dist = std::numeric_limits<double>::infinity();
-  const size_t n = k.points.size();
-  for (size_t i = 0; i + 1 < n; ++i) {
-    const cv::Point3d a = k.points[i], b = k.points[i + 1];
-    const cv::Point3d ab = b - a;
-    const double len2 = ab.dot(ab);
-    double f = (x - a).dot(ab) / len2;
-    // The end segments extend the line beyond the polyline.
-    const double lo = i == 0 ? -1e9 : 0.0, hi = i + 2 == n ? 1e9 : 1.0;
-    f = std::clamp(f, lo, hi);
-    const cv::Point3d foot = a + f * ab;
-    const double dist = cv::norm(x - foot);
-    if (dist < best_dist) {
-      best_dist = dist;
-      const double len = std::sqrt(len2);
-      best.arc_m = k.arcs[i] + f * len;
-      best.offset_m = dist;
-      const cv::Vec3d t(ab.x / len, ab.y / len, ab.z / len);
-      cv::Vec3d down = cv::Vec3d(0, 1, 0) - t[1] * t;
-      down *= 1.0 / cv::norm(down);
-      const cv::Vec3d side = t.cross(down);
-      const cv::Vec3d e(x.x - foot.x, x.y - foot.y, x.z - foot.z);
-      best.down_m = e.dot(down);
-      best.side_m = e.dot(side);
-      best.tangent = t;
-    }
-  }
-  return best;
+  return CurveLocator(k).Locate(x);
 }
 
 LinePosition ConductorModel::Locate(const cv::Point3d& x) const { return LocateOnCurve(line, x); }

@@ -129,12 +129,12 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
                             const ConductorOptions& options, const cv::Mat& bodies = cv::Mat(),
                             const ConductorModel* previous = nullptr);
 
-// Position of X relative to a curve (see ConductorModel::Locate).
+// Position of X relative to a curve (see ConductorModel::Locate); CurveLocator for many points.
 LinePosition LocateOnCurve(const ConductorCurve& curve, const cv::Point3d& x);
 
-// LocateOnCurve for many points on one curve: each segment's frame (length, tangent, down, side)
-// is worked out once instead of for every point. The result is LocateOnCurve's bit for bit (the
-// same arithmetic; conductor_test checks it on awkward curves).
+// Positions of many points on one curve: each segment's frame (length, tangent, down, side) is
+// worked out once instead of for every point. conductor_test checks it bit for bit against a
+// naive reference that works the frame out per point, on awkward curves.
 class CurveLocator {
  public:
   explicit CurveLocator(const ConductorCurve& curve);

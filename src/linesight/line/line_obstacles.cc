@@ -285,8 +285,9 @@ void Range(const RangingPipeline& pipeline, const RangingFrame& frame, const cv:
   o->sigma_m = o->range.sigma_m;
   std::vector<double> arcs;
   cv::Vec3d tangent(0, 0, 1);
+  const CurveLocator locator(model.line);
   for (const cv::Point& p : o->range.surface_pixels) {
-    const LinePosition at = model.Locate(BackProjectAt(g, p.x, p.y, o->distance_m));
+    const LinePosition at = locator.Locate(BackProjectAt(g, p.x, p.y, o->distance_m));
     arcs.push_back(at.arc_m);
     tangent = at.tangent;
   }
