@@ -1,6 +1,9 @@
 #include "linesight/ranging/thin_structures.h"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -42,6 +45,101 @@ void ThinStructureOptions::Check() const {
               "must exceed min_depth_m");
 }
 
+namespace {
+
+// Up to this size OpenCV's own morphology (SIMD over the element's pixels) is the faster; both give
+// the same pixels.
+constexpr int kSmallEllipse = 11;
+
+// Half-width of each row of OpenCV's n x n MORPH_ELLIPSE structuring element (symmetric about its
+// centre, each row one run; -1 for an empty row).
+std::vector<int> EllipseRows(int n) {
+  LS_CHECK(n >= 1 && n % 2 == 1);
+  const cv::Mat k = cv::getStructuringElement(cv::MORPH_ELLIPSE, {n, n});
+  std::vector<int> rows;
+  for (int y = 0; y < n; ++y) {
+    const std::uint8_t* row = k.ptr<std::uint8_t>(y);
+    int first = n, last = -1;
+    for (int x = 0; x < n; ++x) {
+      if (row[x]) {
+        first = std::min(first, x);
+        last = std::max(last, x);
+      }
+    }
+    LS_CHECK(last < 0 || (first + last == n - 1 && cv::countNonZero(k.row(y)) == last - first + 1));
+    rows.push_back(last < 0 ? -1 : (last - first) / 2);
+  }
+  return rows;
+}
+
+// Dilation of `src` (0 / 255) by the row runs: out(y, x) is set when some row j of the element
+// has a pixel of row y + j - n / 2 of `src` within its half-width of x. Each row's horizontal
+// distance to its nearest set pixel is computed once; then each element row costs one compare a
+// pixel, instead of one per element pixel.
+void DilateRows(const cv::Mat& src, const std::vector<int>& rows, cv::Mat* out, EllipseScratch* s) {
+  // Distances saturate at 255: a run's half-width is at most 254 (n <= 509).
+  LS_CHECK(rows.size() <= 509);
+  constexpr int kFar = 255;
+  s->near.create(src.size(), CV_8U);
+  for (int y = 0; y < src.rows; ++y) {
+    const std::uint8_t* in = src.ptr<std::uint8_t>(y);
+    std::uint8_t* d = s->near.ptr<std::uint8_t>(y);
+    int last = -kFar;
+    for (int x = 0; x < src.cols; ++x) {
+      if (in[x]) last = x;
+      d[x] = std::uint8_t(std::min(kFar, x - last));
+    }
+    last = std::numeric_limits<int>::max() / 2;
+    for (int x = src.cols - 1; x >= 0; --x) {
+      if (in[x]) last = x;
+      d[x] = std::uint8_t(std::min<int>(d[x], std::min(kFar, last - x)));
+    }
+  }
+  out->create(src.size(), CV_8U);
+  const int half = int(rows.size()) / 2, cols = src.cols, height = src.rows;
+  for (int y = 0; y < height; ++y) {
+    std::uint8_t* __restrict o = out->ptr<std::uint8_t>(y);
+    std::fill(o, o + cols, std::uint8_t(0));
+    for (int j = 0; j < int(rows.size()); ++j) {
+      const int yy = y + j - half;
+      if (rows[size_t(j)] < 0 || yy < 0 || yy >= height) continue;
+      const std::uint8_t* __restrict d = s->near.ptr<std::uint8_t>(yy);
+      const std::uint8_t w = std::uint8_t(rows[size_t(j)]);
+      // One byte compare a pixel, unconditionally stored, which the compiler vectorises.
+      for (int x = 0; x < cols; ++x) o[x] = std::uint8_t(o[x] | (d[x] <= w ? 0xff : 0));
+    }
+  }
+}
+
+}  // namespace
+
+void DilateEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch) {
+  LS_CHECK(src.type() == CV_8UC1);
+  if (n <= kSmallEllipse) {
+    cv::dilate(src, *out, cv::getStructuringElement(cv::MORPH_ELLIPSE, {n, n}));
+    return;
+  }
+  DilateRows(src, EllipseRows(n), out, scratch);
+}
+
+void ErodeEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch) {
+  LS_CHECK(src.type() == CV_8UC1);
+  if (n <= kSmallEllipse) {
+    cv::erode(src, *out, cv::getStructuringElement(cv::MORPH_ELLIPSE, {n, n}));
+    return;
+  }
+  // The erosion is the complement of the complement's dilation (the element is symmetric);
+  // outside the image the source counts as set, so its complement as clear.
+  cv::compare(src, 0, scratch->complement, cv::CMP_EQ);
+  DilateRows(scratch->complement, EllipseRows(n), out, scratch);
+  cv::bitwise_not(*out, *out);
+}
+
+void CloseEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch) {
+  DilateEllipse(src, n, &scratch->dilated, scratch);
+  ErodeEllipse(scratch->dilated, n, out, scratch);
+}
+
 cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const cv::Rect& region,
                  const ThinStructureOptions& options, bool seeds_only) {
   options.Check();
@@ -76,9 +174,12 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
   const cv::Mat view = disparity(outer);
   const cv::Mat band_of = depth_bands.Map(view);
-  // Each band's bounding box: a band's surface, its closing, distances and growth only reach a
-  // few radii beyond it, so each band is worked on inside that box plus a margin, not on the whole
-  // view (the result is the same pixel for pixel; the reference test checks this).
+  // Each band's bounding box: each band is worked on inside the box of its surface plus a margin,
+  // not on the whole view, with the same result pixel for pixel (the reference test checks this).
+  // The closing adds pixels only within its disc's radius of the surface, so a margin of that
+  // radius plus two pixels leaves a ring of pixels off the surface inside the crop: every distance
+  // from a pixel of the box to the nearest pixel off the surface is then measured inside the crop,
+  // and the growth from the seeds is cut to the closed surface, which is inside the crop too.
   std::vector<cv::Rect> box_of(static_cast<size_t>(bands));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
@@ -92,6 +193,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
   cv::Mat body(view.size(), CV_8U, cv::Scalar(0));
   cv::Mat surface, padded, distance, seeds, grown, in_band;
+  EllipseScratch scratch;
   for (int k = 0; k < bands; ++k) {
     if (box_of[size_t(k)].empty()) continue;
     cv::Rect box = box_of[size_t(k)];
@@ -103,13 +205,16 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     // with a disc of the body radius fills holes narrower than that radius without widening a
     // conductor.
     const int close = std::max(3, int(std::round(radius)) | 1);
-    const int reach = close + r + 3;
+    const int reach = close / 2 + 2;
     const cv::Rect crop = (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & whole;
     cv::inRange(band_of(crop), k - 1, k + 1, surface);
-    cv::morphologyEx(surface, surface, cv::MORPH_CLOSE,
-                     cv::getStructuringElement(cv::MORPH_ELLIPSE, {close, close}));
-    // Beyond the view's own edges the surface continues (replicated), as if the view went on.
-    const int pad = at_border ? r + 1 : 0;
+    CloseEllipse(surface, close, &surface, &scratch);
+    // Beyond the view's own edges the surface continues (replicated), as if the view went on. (A
+    // crop's other edges are off the surface, and so is the ring inside them.)
+    const bool crop_at_border =
+        at_border &&
+        (crop.x == 0 || crop.y == 0 || crop.br().x == whole.width || crop.br().y == whole.height);
+    const int pad = crop_at_border ? r + 1 : 0;
     cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
     cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
     cv::compare(band_of(crop), k, in_band, cv::CMP_EQ);
@@ -120,7 +225,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       target |= seeds;
       continue;
     }
-    cv::dilate(seeds, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
+    DilateEllipse(seeds, 2 * r + 1, &grown, &scratch);
     target |= grown & surface;
   }
   return body(cv::Rect(region.x - outer.x, region.y - outer.y, region.width, region.height))

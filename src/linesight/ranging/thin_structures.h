@@ -44,6 +44,18 @@ struct ThinStructureOptions {
   void Check() const;
 };
 
+// Binary morphology (CV_8UC1, 0 / 255) with OpenCV's n x n MORPH_ELLIPSE element (n odd), the
+// same pixels as cv::dilate / cv::erode / cv::morphologyEx(MORPH_CLOSE) with it and their default
+// borders (thin_structures_test checks this on awkward sizes), at a cost that grows with n, not
+// n^2: the element is a stack of centred row runs, and a pixel is in a run's dilation when the
+// horizontal distance to the nearest set pixel of that row is at most the run's half-width.
+struct EllipseScratch {
+  cv::Mat near, complement, dilated;
+};
+void DilateEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
+void ErodeEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
+void CloseEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
+
 // Returns (CV_8U, 255 = on a body) for `region` of the disparity; the pixels around `region` are
 // looked at too, so that the region's border does not cut a body. With `seeds_only` the result
 // holds only the pixels deep inside a body (before growing back), which is what automatic obstacle

@@ -19,6 +19,47 @@ TEST(ThinStructureOptionsTest, DefaultsAreValidAndBoundsAreChecked) {
   EXPECT_THROW((ThinStructureOptions{.min_depth_m = 2.0, .max_depth_m = 1.0}.Check()), OptionError);
 }
 
+// Random masks with blobs, lines and speckle, touching the borders.
+cv::Mat RandomMask(cv::Size size, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  cv::Mat mask(size, CV_8U, cv::Scalar(0));
+  for (int i = 0; i < 6; ++i) {
+    const cv::Point c(int(unit(rng) * size.width), int(unit(rng) * size.height));
+    cv::circle(mask, c, 1 + int(unit(rng) * 30), cv::Scalar(255), cv::FILLED);
+    cv::line(mask, c, {int(unit(rng) * size.width), int(unit(rng) * size.height)}, cv::Scalar(255),
+             1 + int(unit(rng) * 4));
+  }
+  for (int y = 0; y < size.height; ++y) {
+    for (int x = 0; x < size.width; ++x) {
+      if (unit(rng) < 0.02) mask.at<std::uint8_t>(y, x) ^= 255;
+    }
+  }
+  return mask;
+}
+
+TEST(EllipseMorphologyTest, EqualsOpenCvMorphologyWithTheEllipseOnAwkwardSizes) {
+  const cv::Size sizes[] = {{1, 1}, {3, 97}, {97, 3}, {61, 43}, {130, 77}};
+  std::uint64_t seed = 1;
+  cv::Mat fast, naive;
+  EllipseScratch scratch;
+  for (const cv::Size size : sizes) {
+    const cv::Mat mask = RandomMask(size, seed++);
+    for (const int n : {1, 3, 5, 7, 9, 15, 31, 57, 101, 151}) {
+      const cv::Mat element = cv::getStructuringElement(cv::MORPH_ELLIPSE, {n, n});
+      DilateEllipse(mask, n, &fast, &scratch);
+      cv::dilate(mask, naive, element);
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0) << "dilate " << size << " n " << n;
+      ErodeEllipse(mask, n, &fast, &scratch);
+      cv::erode(mask, naive, element);
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0) << "erode " << size << " n " << n;
+      CloseEllipse(mask, n, &fast, &scratch);
+      cv::morphologyEx(mask, naive, cv::MORPH_CLOSE, element);
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0) << "close " << size << " n " << n;
+    }
+  }
+}
+
 // The reference: every depth band worked on over the whole view (what BodyMask computes inside
 // each band's bounding box).
 cv::Mat NaiveBodyMask(const cv::Mat& disparity, const StereoGeometry& geometry,
