@@ -282,6 +282,18 @@ std::optional<ConductorCurve> FindOne(const std::vector<Candidate>& all,
     sample.resize(o.max_candidates);
   }
   const double sample_share = double(sample.size()) / pool.size();
+  // The sample's coordinates and tolerances as arrays, for a scoring loop the compiler vectorises
+  // (the score only ranks hypotheses; the inliers are then selected in double precision).
+  const size_t n = sample.size();
+  std::vector<float> su(n), sv(n), sd(n), shw(n), sdt(n);
+  for (size_t j = 0; j < n; ++j) {
+    const Candidate& c = all[size_t(sample[j])];
+    su[j] = c.u;
+    sv[j] = c.v;
+    sd[j] = c.d;
+    shw[j] = float(tol.HalfWidth(c.d));
+    sdt[j] = float(tol.Disparity(c.d));
+  }
   int best_score = -1;
   LineHypothesis best;
   for (int h = 0; h < o.ransac_hypotheses; ++h) {
@@ -291,8 +303,16 @@ std::optional<ConductorCurve> FindOne(const std::vector<Candidate>& all,
     const double len = std::hypot(du, dv);
     if (len < 15.0) continue;
     LineHypothesis line{{a.u, a.v}, {du / len, dv / len}, a.d, (b.d - a.d) / len};
+    const float ox = a.u, oy = a.v, ax = float(line.axis.x), ay = float(line.axis.y);
+    const float d0 = a.d, slope = float(line.slope);
     int score = 0;
-    for (int i : sample) score += Supports(line, all[i], tol);
+    for (size_t j = 0; j < n; ++j) {
+      const float pu = su[j] - ox, pv = sv[j] - oy;
+      const float t = pu * ax + pv * ay;
+      const float across = pv * ax - pu * ay;
+      const float off = sd[j] - (d0 + slope * t);
+      score += (std::fabs(across) <= shw[j]) & (std::fabs(off) <= sdt[j]);
+    }
     if (score > best_score) {
       best_score = score;
       best = line;
@@ -458,33 +478,92 @@ CurveLocator::CurveLocator(const ConductorCurve& k) {
     s.side = s.tangent.cross(s.down);
     segments_.push_back(s);
   }
+  // The end segments extend to infinity; the tree holds the ones between them.
+  const int interior = std::max(0, int(segments_.size()) - 2);
+  if (interior > 0) {
+    nodes_.resize(size_t(4 * interior));
+    Build(0, 1, 1 + interior);
+  }
+}
+
+int CurveLocator::Build(int node, int first, int last) {
+  constexpr int kLeafSegments = 4;
+  Node& nd = nodes_[size_t(node)];
+  nd.first = first;
+  nd.last = last;
+  cv::Point3d lo(1e300, 1e300, 1e300), hi(-1e300, -1e300, -1e300);
+  for (int i = first; i < last; ++i) {
+    for (const cv::Point3d& p :
+         {segments_[size_t(i)].a, segments_[size_t(i)].a + segments_[size_t(i)].ab}) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+  }
+  nd.centre = 0.5 * (lo + hi);
+  // Half the box's diagonal holds every endpoint, so every segment between them; a non-finite
+  // point makes it infinite (the branch is always searched).
+  nd.radius = 0.5 * cv::norm(hi - lo) * (1 + 1e-12) + 1e-12;
+  if (!std::isfinite(nd.radius)) nd.radius = std::numeric_limits<double>::infinity();
+  if (last - first > kLeafSegments) {
+    const int mid = first + (last - first) / 2;
+    Build(2 * node + 1, first, mid);
+    Build(2 * node + 2, mid, last);
+  } else {
+    nd.first = -nd.first - 1;  // a leaf
+  }
+  return node;
+}
+
+struct CurveLocator::Nearest {
+  double dist = std::numeric_limits<double>::infinity();
+  int index = -1;
+  double f = 0;
+  cv::Point3d foot;
+};
+
+void CurveLocator::Visit(const Segment& s, int index, const cv::Point3d& x, Nearest* best) const {
+  const double f = std::clamp((x - s.a).dot(s.ab) / s.len2, s.lo, s.hi);
+  const cv::Point3d foot = s.a + f * s.ab;
+  const double dist = cv::norm(x - foot);
+  // The first of equally near segments, as a scan in polyline order finds.
+  if (dist < best->dist || (dist == best->dist && index < best->index)) {
+    *best = {dist, index, f, foot};
+  }
+}
+
+void CurveLocator::Search(int node, const cv::Point3d& x, Nearest* best) const {
+  const Node& nd = nodes_[size_t(node)];
+  if (cv::norm(x - nd.centre) - nd.radius > best->dist) return;
+  if (nd.first < 0) {
+    for (int i = -nd.first - 1; i < nd.last; ++i) Visit(segments_[size_t(i)], i, x, best);
+    return;
+  }
+  // The nearer child first, so that the farther one is more often skipped.
+  const int a = 2 * node + 1, b = 2 * node + 2;
+  const bool a_first =
+      cv::norm(x - nodes_[size_t(a)].centre) <= cv::norm(x - nodes_[size_t(b)].centre);
+  Search(a_first ? a : b, x, best);
+  Search(a_first ? b : a, x, best);
 }
 
 LinePosition CurveLocator::Locate(const cv::Point3d& x) const {
-  LinePosition best;
-  double best_dist = std::numeric_limits<double>::infinity();
-  const Segment* nearest = nullptr;
-  double nearest_f = 0;
-  cv::Point3d nearest_foot;
-  for (const Segment& s : segments_) {
-    const double f = std::clamp((x - s.a).dot(s.ab) / s.len2, s.lo, s.hi);
-    const cv::Point3d foot = s.a + f * s.ab;
-    const double dist = cv::norm(x - foot);
-    if (dist < best_dist) {
-      best_dist = dist;
-      nearest = &s;
-      nearest_f = f;
-      nearest_foot = foot;
-    }
+  LinePosition result;
+  if (segments_.empty()) return result;
+  Nearest best;
+  Visit(segments_.front(), 0, x, &best);
+  if (segments_.size() > 1) {
+    Visit(segments_.back(), int(segments_.size()) - 1, x, &best);
   }
-  if (nearest == nullptr) return best;
-  best.arc_m = nearest->arc + nearest_f * nearest->len;
-  best.offset_m = best_dist;
-  const cv::Vec3d e(x.x - nearest_foot.x, x.y - nearest_foot.y, x.z - nearest_foot.z);
-  best.down_m = e.dot(nearest->down);
-  best.side_m = e.dot(nearest->side);
-  best.tangent = nearest->tangent;
-  return best;
+  if (!nodes_.empty()) Search(0, x, &best);
+  if (best.index < 0) return result;
+  const Segment& s = segments_[size_t(best.index)];
+  result.arc_m = s.arc + best.f * s.len;
+  result.offset_m = best.dist;
+  const cv::Vec3d e(x.x - best.foot.x, x.y - best.foot.y, x.z - best.foot.z);
+  result.down_m = e.dot(s.down);
+  result.side_m = e.dot(s.side);
+  result.tangent = s.tangent;
+  return result;
 }
 
 nlohmann::json ConductorModel::ToJson() const {

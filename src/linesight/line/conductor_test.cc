@@ -194,9 +194,10 @@ LinePosition ReferenceLocate(const ConductorCurve& k, const cv::Point3d& x) {
   return best;
 }
 
-// CurveLocator works each segment's frame out once: it must give the reference's bits on awkward
-// curves (2 points, a kink, near-duplicate points, a vertical segment, a long
-// sagging polyline) for points beside, beyond and behind them.
+// CurveLocator works each segment's frame out once and searches a tree of segments: it must give
+// the reference's bits on awkward curves (2 points, a kink, near-duplicate points, a vertical
+// segment, a long sagging polyline, a 400-point polyline that winds back on itself with repeated
+// points) for points beside, beyond and behind them.
 TEST(CurveLocatorTest, EqualsTheNaiveReferenceBitForBit) {
   cv::RNG rng(11);
   std::vector<std::vector<cv::Point3d>> polylines = {
@@ -210,6 +211,14 @@ TEST(CurveLocatorTest, EqualsTheNaiveReferenceBitForBit) {
     sag.push_back({0.3 * t, 0.2 * (t - 0.5) * (t - 0.5), 0.5 + 7.5 * t});
   }
   polylines.push_back(sag);
+  // Long enough for a deep tree of segments, with repeated points and a loop back on itself.
+  std::vector<cv::Point3d> wiggle;
+  for (int i = 0; i < 413; ++i) {
+    const double t = i / 412.0;
+    wiggle.push_back({0.2 * std::sin(40 * t), 0.1 * std::cos(25 * t), 0.4 + 8 * t * (1.2 - t)});
+    if (i % 97 == 5) wiggle.push_back(wiggle.back());
+  }
+  polylines.push_back(wiggle);
   for (const auto& points : polylines) {
     ConductorCurve curve;
     curve.points = points;
@@ -220,7 +229,12 @@ TEST(CurveLocatorTest, EqualsTheNaiveReferenceBitForBit) {
     }
     const CurveLocator locator(curve);
     for (int k = 0; k < 2000; ++k) {
-      const cv::Point3d x(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 9.0));
+      // Points anywhere, and points a few centimetres from the polyline (most pixels' case).
+      const cv::Point3d near = points[size_t(rng.uniform(0, int(points.size())))];
+      const cv::Point3d x =
+          k % 2 == 0
+              ? cv::Point3d(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 9.0))
+              : near + cv::Point3d(rng.gaussian(0.05), rng.gaussian(0.05), rng.gaussian(0.05));
       const LinePosition want = ReferenceLocate(curve, x), got = locator.Locate(x);
       // Bits, not values: a vertical segment has no "down" and both give the same NaN there.
       const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
