@@ -486,7 +486,7 @@ CurveLocator::CurveLocator(const ConductorCurve& k) {
   }
 }
 
-int CurveLocator::Build(int node, int first, int last) {
+void CurveLocator::Build(int node, int first, int last) {
   constexpr int kLeafSegments = 4;
   Node& nd = nodes_[size_t(node)];
   nd.first = first;
@@ -509,9 +509,8 @@ int CurveLocator::Build(int node, int first, int last) {
     Build(2 * node + 1, first, mid);
     Build(2 * node + 2, mid, last);
   } else {
-    nd.first = -nd.first - 1;  // a leaf
+    nd.leaf = true;
   }
-  return node;
 }
 
 struct CurveLocator::Nearest {
@@ -534,8 +533,8 @@ void CurveLocator::Visit(const Segment& s, int index, const cv::Point3d& x, Near
 void CurveLocator::Search(int node, const cv::Point3d& x, Nearest* best) const {
   const Node& nd = nodes_[size_t(node)];
   if (cv::norm(x - nd.centre) - nd.radius > best->dist) return;
-  if (nd.first < 0) {
-    for (int i = -nd.first - 1; i < nd.last; ++i) Visit(segments_[size_t(i)], i, x, best);
+  if (nd.leaf) {
+    for (int i = nd.first; i < nd.last; ++i) Visit(segments_[size_t(i)], i, x, best);
     return;
   }
   // The nearer child first, so that the farther one is more often skipped.

@@ -155,9 +155,10 @@ class CurveLocator {
     cv::Point3d centre;
     double radius = 0;
     int first = 0, last = 0;
+    bool leaf = false;
   };
   struct Nearest;
-  int Build(int node, int first, int last);
+  void Build(int node, int first, int last);
   void Visit(const Segment& s, int index, const cv::Point3d& x, Nearest* best) const;
   void Search(int node, const cv::Point3d& x, Nearest* best) const;
 
