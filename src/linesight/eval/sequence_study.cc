@@ -71,11 +71,19 @@ int SequenceStudyFrames(const SequenceStudyOptions& options) {
 }
 
 nlohmann::json SequenceRateStats::ToJson() const {
-  return {{"scored", scored},           {"matched", matched},
-          {"recall", recall()},         {"detections", detections},
-          {"precision", precision()},   {"true_detections", true_detections},
-          {"typed_right", typed_right}, {"type_accuracy", type_accuracy()},
-          {"typed_as", typed_as}};
+  return {{"scored", scored},
+          {"matched", matched},
+          {"recall", recall()},
+          {"detections", detections},
+          {"precision", precision()},
+          {"true_detections", true_detections},
+          {"typed_right", typed_right},
+          {"type_accuracy", type_accuracy()},
+          {"typed_as", typed_as},
+          {"missed",
+           {{"no_conductor", missed_no_conductor},
+            {"off_distance", missed_off_distance},
+            {"not_found", missed_not_found}}}};
 }
 
 nlohmann::json SequenceErrorStats::ToJson() const {
@@ -249,11 +257,19 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
         o.farthest_scored_m = std::max(o.farthest_scored_m, truth.near_arc_m);
         const int type = TypeIndex(acc.types, o.type);
         const int bin = acc.Bin(truth.near_arc_m);
+        const bool overlapped =
+            std::any_of(found.obstacles.begin(), found.obstacles.end(),
+                        [&](const LineObstacle& d) { return (d.box & truth.box).area() > 0; });
         for (SequenceRateStats* s : {&acc.all, type >= 0 ? &acc.by_type[type] : nullptr,
                                      bin >= 0 ? &acc.by_bin[bin] : nullptr}) {
           if (s == nullptr) continue;
           ++s->scored;
           s->matched += k >= 0;
+          if (k < 0) {
+            ++(!found.conductor.ok() ? s->missed_no_conductor
+               : overlapped          ? s->missed_off_distance
+                                     : s->missed_not_found);
+          }
           s->typed_right += typed;
           if (k >= 0) ++s->typed_as[LineObstacleTypeName(found.obstacles[k].type)];
         }
@@ -386,16 +402,21 @@ std::string SequenceStudyReport::ToMarkdown() const {
   out += RatesRow("all", all);
   out +=
       "\n| along the line (m) | scored | recall | precision | arc median % | arc p95 % | "
-      "straight median % | straight p95 % |\n|---|---|---|---|---|---|---|---|\n";
+      "straight median % | straight p95 % | missed: no conductor | missed: off in distance | "
+      "missed: not found |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  const auto misses = [](const SequenceRateStats& r) {
+    return fmt::format("{} | {} | {}", r.missed_no_conductor, r.missed_off_distance,
+                       r.missed_not_found);
+  };
   for (const SequenceBin& b : bins) {
-    out +=
-        fmt::format("| {:.1f}-{:.1f} | {} | {:.3f} | {:.3f} | {} | {} | {} | {} |\n", b.from_m,
-                    b.to_m, b.rates.scored, b.rates.recall(), b.rates.precision(),
-                    Pct(b.arc.median), Pct(b.arc.p95), Pct(b.straight.median), Pct(b.straight.p95));
+    out += fmt::format("| {:.1f}-{:.1f} | {} | {:.3f} | {:.3f} | {} | {} | {} | {} | {} |\n",
+                       b.from_m, b.to_m, b.rates.scored, b.rates.recall(), b.rates.precision(),
+                       Pct(b.arc.median), Pct(b.arc.p95), Pct(b.straight.median),
+                       Pct(b.straight.p95), misses(b.rates));
   }
-  out += fmt::format("| all | {} | {:.3f} | {:.3f} | {} | {} | {} | {} |\n\n", all.scored,
+  out += fmt::format("| all | {} | {:.3f} | {:.3f} | {} | {} | {} | {} | {} |\n\n", all.scored,
                      all.recall(), all.precision(), Pct(arc.median), Pct(arc.p95),
-                     Pct(straight.median), Pct(straight.p95));
+                     Pct(straight.median), Pct(straight.p95), misses(all));
   out +=
       "| seed | obstacle | type | scored frames | found % | typed % | first found at m | first "
       "typed at m | farthest scored m | tracks | id switches | time to reach median % |\n"

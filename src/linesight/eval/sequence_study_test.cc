@@ -70,6 +70,12 @@ TEST(SequenceStudyTest, ScoresASequenceEndToEnd) {
   }
   EXPECT_EQ(scored, r.all.scored);
   EXPECT_EQ(matched, r.all.matched);
+  // Every miss has one cause.
+  for (const SequenceRateStats& s : r.by_type) {
+    EXPECT_EQ(s.missed_no_conductor + s.missed_off_distance + s.missed_not_found,
+              s.scored - s.matched);
+  }
+  EXPECT_EQ(r.all.missed_no_conductor, 0);
   EXPECT_EQ(static_cast<int>(r.samples.size()), r.all.matched);
   EXPECT_EQ(r.arc.count, r.all.matched);
   ASSERT_EQ(r.bins.size(), o.bin_edges.size() - 1);
