@@ -5,8 +5,11 @@
 // sgm_reference_test.cc checks them against their naive scalar reference (sgm_reference.h) on every
 // target the CPU supports.
 
+#include <sys/mman.h>
+
 #include <algorithm>
 #include <cstdlib>
+#include <new>
 #include <thread>
 #include <type_traits>
 
@@ -444,6 +447,23 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace linesight::detail {
+
+namespace {
+constexpr size_t kHugePage = size_t{2} << 20;
+constexpr size_t kHugeFrom = size_t{4} << 20;
+}  // namespace
+
+void* AllocateVolume(size_t bytes) {
+  if (bytes < kHugeFrom) return ::operator new (bytes, std::align_val_t{64});
+  const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
+  void* p = ::operator new (rounded, std::align_val_t{kHugePage});
+  madvise(p, rounded, MADV_HUGEPAGE);  // advice only: without THP the pages stay 4 KiB
+  return p;
+}
+
+void FreeVolume(void* p, size_t bytes) {
+  ::operator delete (p, std::align_val_t{bytes < kHugeFrom ? size_t{64} : kHugePage});
+}
 
 HWY_EXPORT(SweepImpl);
 
