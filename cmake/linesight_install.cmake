@@ -62,7 +62,7 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
-    "libopencv-dev (>= 4), libopencv-contrib-dev, libeigen3-dev (>= 3.3), libceres-dev, libhwy-dev, \
+    "libopencv-dev (>= 4), libopencv-contrib-dev, libpng-dev, libjpeg-dev, libeigen3-dev (>= 3.3), libceres-dev, libhwy-dev, \
 nlohmann-json3-dev (>= 3), libspdlog-dev, libfmt-dev, libboost-graph-dev (>= 1.74), libcpp-httplib-dev, \
 pkgconf | pkg-config")
 include(CPack)

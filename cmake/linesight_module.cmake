@@ -88,7 +88,9 @@ function(linesight_add_module name)
 
   if(LINESIGHT_BUILD_TESTS AND M_TESTS)
     add_executable(${lib}_test ${M_TESTS})
-    target_link_libraries(${lib}_test PRIVATE ${lib} ${M_TEST_DEPS} GTest::gtest GTest::gmock GTest::gtest_main)
+    # Tests may compare with imgcodecs or write videos: they link all of OpenCV.
+    target_link_libraries(${lib}_test PRIVATE ${lib} ${M_TEST_DEPS} ${OpenCV_LIBS} GTest::gtest GTest::gmock
+                                              GTest::gtest_main)
     linesight_target_warnings(${lib}_test)
     linesight_unity_build(${lib}_test)
     linesight_add_gtest(${lib}_test ${name})

@@ -57,6 +57,10 @@ if compgen -G "$build/python/linesight/_core*.so" >/dev/null; then
   log "python: $out"
 fi
 
+log "installed CLI: sgbm-wls (OpenCV's ximgproc through the installed plugin)"
+"$prefix/bin/linesight" disparity --method sgbm-wls --num-disp 64 --left "$data/aloeL.jpg" --right "$data/aloeR.jpg" \
+  --out "$work/wls.pfm" >"$work/wls.log" 2>&1 || fail "the installed linesight could not run sgbm-wls: $(cat "$work/wls.log")"
+
 log "consumer: find_package(linesight) from $prefix"
 quiet "$work/consumer.log" cmake -S "$root/examples/consumer" -B "$work/consumer" -G Ninja \
   -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix"
@@ -108,7 +112,8 @@ dpkg-deb -c "$deb" | awk '$1 !~ /^d/ { print $6 }' | sed 's|^\./usr/||' | sort >
 diff "$work/prefix-files.txt" "$work/deb-files.txt" || fail "the .deb's files differ from the installed prefix"
 for pattern in '^bin/linesight$' '^include/linesight/stereo/matcher\.h$' '^include/linesight/stereo/sgm_lanes-inl\.h$' \
   '^lib/(.*/)?liblinesight_core\.a$' '^lib/(.*/)?liblinesight_server\.a$' '^lib/(.*/)?cmake/linesight/linesightConfig\.cmake$' \
-  '^lib/(.*/)?cmake/linesight/linesightTargets\.cmake$' '^lib/(.*/)?pkgconfig/linesight\.pc$'; do
+  '^lib/(.*/)?cmake/linesight/linesightTargets\.cmake$' '^lib/(.*/)?pkgconfig/linesight\.pc$' \
+  '^lib/(.*/)?linesight/linesight_opencv_plugin\.so$'; do
   grep -qE "$pattern" "$work/deb-files.txt" || fail "the .deb has no file matching $pattern"
 done
 log "OK: $(wc -l <"$work/deb-files.txt") files in $(basename "$deb") ($(du -h "$deb" | cut -f1))"

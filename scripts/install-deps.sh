@@ -6,6 +6,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git clang-format ccache
   libopencv-dev libopencv-contrib-dev opencv-doc
+  libpng-dev libjpeg-dev  # PNG and JPEG read and written without OpenCV's imgcodecs (src/linesight/io/image_codecs.h)
   libeigen3-dev libceres-dev libboost-graph-dev libhwy-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev libcpp-httplib-dev
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -9,10 +9,11 @@
 #include <fmt/format.h>
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
+#include <opencv2/videoio.hpp>  // the CAP_* constants only (enums, nothing to link)
 
 #include "linesight/core/error.h"
 #include "linesight/io/image_io.h"
+#include "linesight/io/opencv_plugin.h"
 #include "linesight/sim/power_line_scene.h"
 #include "linesight/sim/power_line_sequence.h"
 
@@ -131,7 +132,7 @@ class ImageSequenceSource final : public FrameSource {
 };
 
 // ---------------------------------------------------------------------------------------------
-// Video files and cameras through cv::VideoCapture.
+// Video files and cameras through cv::VideoCapture (in the OpenCV plugin: io/opencv_plugin.h).
 // ---------------------------------------------------------------------------------------------
 
 // OpenCV's backends print their own failures on stderr while probing a file; our error says it
@@ -146,10 +147,12 @@ class QuietOpenCvLog {
   cv::utils::logging::LogLevel previous_;
 };
 
-cv::VideoCapture OpenCapture(const std::string& name, bool is_device, const FrameSourceOptions& o,
-                             const std::string& spec) {
+std::unique_ptr<VideoCaptureHandle> OpenCapture(const std::string& name, bool is_device,
+                                                const FrameSourceOptions& o,
+                                                const std::string& spec) {
+  const OpenCvPlugin& opencv = LoadOpenCvPlugin(fmt::format("source '{}'", spec));
   const QuietOpenCvLog quiet;
-  cv::VideoCapture capture;
+  std::unique_ptr<VideoCaptureHandle> capture;
   if (is_device) {
     // "/dev/video3" or "3"
     std::string digits = name;
@@ -164,11 +167,11 @@ cv::VideoCapture OpenCapture(const std::string& name, bool is_device, const Fram
     if (!std::filesystem::exists("/dev/video" + digits)) {
       throw InputError(fmt::format("source '{}': no such camera /dev/video{}", spec, digits));
     }
-    capture.open(std::stoi(digits), cv::CAP_V4L2);
-    if (capture.isOpened()) {
-      if (o.width > 0) capture.set(cv::CAP_PROP_FRAME_WIDTH, o.width);
-      if (o.height > 0) capture.set(cv::CAP_PROP_FRAME_HEIGHT, o.height);
-      if (o.fps > 0) capture.set(cv::CAP_PROP_FPS, o.fps);
+    capture = opencv.OpenCamera(std::stoi(digits), cv::CAP_V4L2);
+    if (capture->IsOpened()) {
+      if (o.width > 0) capture->Set(cv::CAP_PROP_FRAME_WIDTH, o.width);
+      if (o.height > 0) capture->Set(cv::CAP_PROP_FRAME_HEIGHT, o.height);
+      if (o.fps > 0) capture->Set(cv::CAP_PROP_FPS, o.fps);
     }
   } else {
     if (name.find("://") == std::string::npos && name.find('!') == std::string::npos &&
@@ -177,9 +180,10 @@ cv::VideoCapture OpenCapture(const std::string& name, bool is_device, const Fram
     }
     // FFmpeg for files and URLs, GStreamer for pipelines ("... ! appsink"). Not CAP_ANY: probing
     // every backend loads GStreamer's plugins (and libusb) for any file, slowly and leakily.
-    capture.open(name, name.find('!') != std::string::npos ? cv::CAP_GSTREAMER : cv::CAP_FFMPEG);
+    capture = opencv.OpenVideo(
+        name, name.find('!') != std::string::npos ? cv::CAP_GSTREAMER : cv::CAP_FFMPEG);
   }
-  if (!capture.isOpened()) {
+  if (!capture->IsOpened()) {
     throw InputError(fmt::format("source '{}': OpenCV could not open {} '{}'", spec,
                                  is_device ? "camera" : "video", name));
   }
@@ -219,7 +223,7 @@ class CaptureSource final : public FrameSource {
       frame = Grab();
       if (!frame && !devices_) CheckNotTruncated();
       if (!frame && loop_ && next_ > 0) {
-        for (cv::VideoCapture& c : captures_) c.set(cv::CAP_PROP_POS_FRAMES, 0);
+        for (auto& c : captures_) c->Set(cv::CAP_PROP_POS_FRAMES, 0);
         pass_frames_ = 0;
         frame = Grab();
       }
@@ -246,7 +250,7 @@ class CaptureSource final : public FrameSource {
   // a dropped connection must not pass for a complete run).
   void CheckNotTruncated() {
     const size_t i = ended_;  // the file that delivered no frame
-    const double announced = captures_[i].get(cv::CAP_PROP_FRAME_COUNT);
+    const double announced = captures_[i]->Get(cv::CAP_PROP_FRAME_COUNT);
     if (announced > 0 && double(pass_frames_) + 1 < announced) {
       throw InputError(fmt::format(
           "source '{}': video '{}' ended after {} of the {} frames its header announces "
@@ -259,14 +263,14 @@ class CaptureSource final : public FrameSource {
     // grab() both first, then retrieve(): the two cameras' exposures are as close in time as
     // V4L2 allows without a hardware trigger.
     for (size_t i = 0; i < captures_.size(); ++i) {
-      if (!captures_[i].grab()) {
+      if (!captures_[i]->Grab()) {
         ended_ = i;
         return std::nullopt;
       }
     }
     std::vector<cv::Mat> images(captures_.size());
     for (size_t i = 0; i < captures_.size(); ++i) {
-      if (!captures_[i].retrieve(images[i]) || images[i].empty()) {
+      if (!captures_[i]->Retrieve(&images[i]) || images[i].empty()) {
         ended_ = i;
         return std::nullopt;
       }
@@ -286,7 +290,7 @@ class CaptureSource final : public FrameSource {
   bool devices_;
   bool loop_;
   std::string spec_;
-  std::vector<cv::VideoCapture> captures_;
+  std::vector<std::unique_ptr<VideoCaptureHandle>> captures_;
   std::optional<StereoFrame> first_;
   std::string description_;
   int64_t next_ = 0;

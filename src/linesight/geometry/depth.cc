@@ -3,7 +3,6 @@
 #include <cmath>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/disparity.h"

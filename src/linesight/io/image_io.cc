@@ -3,15 +3,18 @@
 #include <glob.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <string>
 #include <system_error>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // the IMREAD_* flag values only (an enum, nothing to link)
 
 #include "linesight/core/atomic_file.h"
 #include "linesight/core/error.h"
+#include "linesight/io/image_codecs.h"
+#include "linesight/io/opencv_plugin.h"
 
 namespace linesight {
 namespace fs = std::filesystem;
@@ -64,13 +67,19 @@ cv::Mat ReadImage(const fs::path& path, ImageColor color) {
     throw InputError(fmt::format("{}: cannot read image: the file is empty ({})", path.string(),
                                  kExpectedImage));
   }
-  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
+  const int flags = ImreadFlags(color, IsPalettePng(bytes));
+  const auto* data = reinterpret_cast<const uint8_t*>(bytes.data());
   cv::Mat image;
-  try {
-    image = cv::imdecode(buffer, ImreadFlags(color, IsPalettePng(bytes)));
-  } catch (const cv::Exception& e) {
-    throw InputError(
-        fmt::format("{}: cannot decode image: {} ({})", path.string(), e.err, kExpectedImage));
+  if (detail::DecodePngOrJpeg({data, bytes.size()}, flags, &image) ==
+      detail::DecodeStatus::kNotHandled) {
+    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
+                         const_cast<char*>(bytes.data()));
+    try {
+      image = LoadOpenCvPlugin(fmt::format("reading {}", path.string())).Decode(buffer, flags);
+    } catch (const cv::Exception& e) {
+      throw InputError(
+          fmt::format("{}: cannot decode image: {} ({})", path.string(), e.err, kExpectedImage));
+    }
   }
   if (image.empty()) {
     throw InputError(fmt::format("{}: cannot decode image: unknown format or corrupt data ({})",
@@ -82,10 +91,23 @@ cv::Mat ReadImage(const fs::path& path, ImageColor color) {
 void WriteImage(const fs::path& path, const cv::Mat& image) {
   if (image.empty())
     throw InputError(fmt::format("{}: cannot write an empty image", path.string()));
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  // PNG and JPEG (OpenCV's default quality, 95) without loading imgcodecs.
+  std::vector<uint8_t> bytes;
+  const bool encoded =
+      (extension == ".png" && detail::EncodePng(image, &bytes)) ||
+      ((extension == ".jpg" || extension == ".jpeg") && detail::EncodeJpeg(image, 95, &bytes));
+  if (encoded) {
+    WriteTextAtomic(path,
+                    std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    return;
+  }
   WriteFileAtomic(path, [&](const fs::path& tmp) {
     bool ok = false;
     try {
-      ok = cv::imwrite(tmp.string(), image);
+      ok = LoadOpenCvPlugin(fmt::format("writing {}", path.string())).Write(tmp.string(), image);
     } catch (const cv::Exception& e) {
       throw InputError(fmt::format("{}: cannot write image ({}x{}, {} channel(s), depth {}): {}",
                                    path.string(), image.cols, image.rows, image.channels(),

@@ -10,13 +10,13 @@
 #include <memory>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
 #include "linesight/core/timer.h"
 #include "linesight/io/annotate.h"
 #include "linesight/io/disparity_io.h"
+#include "linesight/io/image_codecs.h"
 #include "linesight/server/web_page.h"
 
 namespace linesight {
@@ -26,7 +26,10 @@ using Clock = std::chrono::steady_clock;
 
 JpegBytes EncodeJpeg(const cv::Mat& image, int quality) {
   auto bytes = std::make_shared<std::vector<uint8_t>>();
-  cv::imencode(".jpg", image, *bytes, {cv::IMWRITE_JPEG_QUALITY, quality});
+  if (!detail::EncodeJpeg(image, quality, bytes.get())) {
+    throw std::runtime_error(fmt::format("cannot encode a {}x{} image of type {} as JPEG",
+                                         image.cols, image.rows, image.type()));
+  }
   return bytes;
 }
 

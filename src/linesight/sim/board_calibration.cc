@@ -3,9 +3,10 @@
 #include <vector>
 
 #include <fmt/format.h>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // the IMREAD_* flag values only
 
 #include "linesight/core/error.h"
+#include "linesight/io/image_codecs.h"
 
 namespace linesight::sim {
 
@@ -15,9 +16,14 @@ namespace {
 // libpng's RGB-to-grey conversion differs from cv::cvtColor's by one level on some pixels, and the
 // detected corners with it.
 cv::Mat GrayAsReadFromPng(const cv::Mat& bgr) {
-  std::vector<uchar> png;
-  cv::imencode(".png", bgr, png);
-  return cv::imdecode(png, cv::IMREAD_GRAYSCALE);
+  std::vector<uint8_t> png;
+  cv::Mat gray;
+  if (!linesight::detail::EncodePng(bgr, &png) ||
+      linesight::detail::DecodePngOrJpeg(png, cv::IMREAD_GRAYSCALE, &gray) !=
+          linesight::detail::DecodeStatus::kDecoded) {
+    throw std::logic_error("a rendered board view did not pass through PNG");
+  }
+  return gray;
 }
 
 }  // namespace

@@ -3,10 +3,10 @@
 #include <fmt/format.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/ximgproc/disparity_filter.hpp>
 
 #include "linesight/core/error.h"
 #include "linesight/core/scoped_threads.h"
+#include "linesight/io/opencv_plugin.h"
 
 namespace linesight {
 namespace {
@@ -175,10 +175,7 @@ class OpenCvSgbmWls final : public StereoMatcher {
     sigma_ = params.GetDouble("sigma", d.sigma);
     CheckOption(lambda_ >= 0, "sgbm-wls.lambda", lambda_, "must be >= 0");
     CheckOption(sigma_ > 0, "sgbm-wls.sigma", sigma_, "must be > 0");
-    right_matcher_ = cv::ximgproc::createRightMatcher(sgbm_.matcher());
-    wls_ = cv::ximgproc::createDisparityWLSFilter(sgbm_.matcher());
-    wls_->setLambda(lambda_);
-    wls_->setSigmaColor(sigma_);
+    wls_ = LoadOpenCvPlugin("the sgbm-wls matcher").CreateSgbmWls(sgbm_.matcher(), lambda_, sigma_);
   }
 
   std::string Name() const override { return "sgbm-wls"; }
@@ -187,10 +184,8 @@ class OpenCvSgbmWls final : public StereoMatcher {
     CheckPair(left, right);
     const ScopedOpenCvThreads threads(options_.threads);
     const cv::Mat left_gray = ToGray8(left), right_gray = ToGray8(right);
-    cv::Mat left_fixed, right_fixed, filtered;
-    sgbm_.matcher()->compute(left_gray, right_gray, left_fixed);
-    right_matcher_->compute(right_gray, left_gray, right_fixed);
-    wls_->filter(left_fixed, left, filtered, right_fixed, cv::Rect(), right);
+    cv::Mat filtered;
+    wls_->Compute(left_gray, right_gray, left, right, &filtered);
     const cv::Mat disparity =
         FixedPointToFloatDisparity(filtered, options_.min_disparity, options_.num_disparities);
     return {disparity, disparity};
@@ -208,8 +203,7 @@ class OpenCvSgbmWls final : public StereoMatcher {
   MatcherOptions options_;
   OpenCvSgbm sgbm_;
   double lambda_, sigma_;
-  cv::Ptr<cv::StereoMatcher> right_matcher_;
-  cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls_;
+  std::unique_ptr<SgbmWlsHandle> wls_;
 };
 
 }  // namespace
