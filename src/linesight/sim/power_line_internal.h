@@ -1,9 +1,11 @@
-// Internal to the sim module: the pieces of the power-line scene shared by its obstacle models
-// (obstacle_models.cc), its layout (power_line_layout.cc) and its renderer (power_line_scene.cc).
+// Internal to the sim module: the pieces of the power-line scene shared by its obstacle and defect
+// models (obstacle_models.cc, defect_models.cc), its layout (power_line_layout.cc) and its renderer
+// (power_line_scene.cc).
 #pragma once
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -49,6 +51,18 @@ inline Shape Cable(Shape s, double arc_offset) {
 // its shapes carry obstacle id `id` (a crossarm above an insulator string is tower, id 0).
 void AddObstacle(ObstacleType type, const LocalFrame& f, double r, int id,
                  std::vector<Shape>* shapes);
+
+// Appends the shapes of defect spec number `index` (0-based; its shapes carry defect id index + 1)
+// placed in frame `f` on conductor 0 of radius r (m). `arc_at_origin` is the conductor's texture
+// arc at f.origin (so a birdcage continues the helix of the strands) and `lay_strands` the number
+// of outer strands.
+void AddDefect(const DefectSpec& spec, int index, const LocalFrame& f, double r,
+               double arc_at_origin, int lay_strands, std::vector<Shape>* shapes);
+// RenderedDefect::size_m of `spec` on a conductor of radius r (m).
+double DefectSize(const DefectSpec& spec, double r);
+// Throws OptionError naming `name`.<field> when a field of `spec` is out of its range (all but
+// arc_m, whose range depends on the span).
+void CheckDefectSpec(const DefectSpec& spec, const std::string& name);
 
 // What the rectified left camera sees of obstacle `id` inside `roi` of a ground-truth trace (depth
 // Z_rect and obstacle ids).

@@ -1,6 +1,6 @@
 // Layout of a power-line scene (detail::BuildPowerLineSceneModel): the catenary conductors, the
-// lattice towers, the lighting, and the placement of every obstacle at its requested distance as
-// seen by the rectified left camera.
+// lattice towers, the lighting, the defects on conductor 0, and the placement of every obstacle at
+// its requested distance as seen by the rectified left camera.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -340,6 +340,25 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
   const double arc_origin = line.Arc(0.5 * (h_lo + h_hi));
   const double radius = options.conductor_radius_m;
   const Vec3 w = poses.rectified_left.camera_from_scene.r2;
+  // Defects are part of the line: fixed before the obstacles are placed, so that what they hide is
+  // taken into account.
+  for (size_t i = 0; i < options.defects.size(); ++i) {
+    const DefectSpec& spec = options.defects[i];
+    const double arc = arc_origin + spec.arc_m;
+    const LocalFrame frame = FrameOnConductor(line, 0, arc);
+    std::vector<Shape> shapes;
+    detail::AddDefect(spec, static_cast<int>(i), frame, radius, arc, options.conductor_strands,
+                      &shapes);
+    // Extent along the line: the support of its shapes along the tangent at its centre.
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Shape& s : shapes) {
+      lo = std::min(lo, detail::MinAlongDirection(s, frame.along));
+      hi = std::max(hi, -detail::MinAlongDirection(s, -frame.along));
+    }
+    const double centre = Dot(frame.along, frame.origin);
+    model.defect_extent.push_back({spec.arc_m + lo - centre, spec.arc_m + hi - centre});
+    parts.fixed.insert(parts.fixed.end(), shapes.begin(), shapes.end());
+  }
   std::vector<std::vector<Shape>> placed(options.obstacles.size());
   SceneParts assembly;
   assembly.fixed = parts.fixed;

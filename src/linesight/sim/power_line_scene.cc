@@ -1,6 +1,6 @@
-// Rendering of a power-line scene (PowerLineSceneRenderer, RenderPowerLineScene): ground truth and
-// radiance of the laid-out scene (power_line_layout.cc), the sensor model per capture, and the
-// scene's files.
+// Rendering of a power-line scene (PowerLineSceneRenderer, RenderPowerLineScene): ground truth
+// (obstacles and defects) and radiance of the laid-out scene (power_line_layout.cc), the sensor
+// model per capture, and the scene's files.
 #include "linesight/sim/power_line_scene.h"
 
 #include <cmath>
@@ -55,9 +55,10 @@ PowerLineSceneRenderer::PowerLineSceneRenderer(const PowerLineSceneOptions& opti
   const cv::Size size = options.rig.image_size;
   const CameraIntrinsics rect_k = detail::RectifiedIntrinsics(result.calibration);
 
-  cv::Mat depth, surface_class, ids;
+  cv::Mat depth, surface_class, ids, defect_ids;
   detail::TraceGroundTruth(scene, rect_k, poses.rectified_left, size,
-                           cv::Rect(0, 0, size.width, size.height), &depth, &surface_class, &ids);
+                           cv::Rect(0, 0, size.width, size.height), &depth, &surface_class, &ids,
+                           &defect_ids);
   const double focal_baseline = result.calibration.RectifiedFocal() * result.calibration.Baseline();
   cv::Mat disparity(size, CV_32FC1);
   for (int v = 0; v < size.height; ++v) {
@@ -89,6 +90,24 @@ PowerLineSceneRenderer::PowerLineSceneRenderer(const PowerLineSceneOptions& opti
     o.arc_m = model.arc[i];
     o.near_arc_m = o.arc_m + ObstacleAlongExtent(o.type)[0];
     result.obstacles.push_back(o);
+  }
+  result.defect_mask = defect_ids;
+  for (size_t i = 0; i < options.defects.size(); ++i) {
+    const DefectSpec& spec = options.defects[i];
+    const int id = static_cast<int>(i) + 1;
+    const VisibleStats stats =
+        MeasureVisible(depth, defect_ids, id, cv::Rect(0, 0, size.width, size.height));
+    RenderedDefect d;
+    d.id = id;
+    d.type = spec.type;
+    d.arc_m = spec.arc_m;
+    d.arc_begin_m = model.defect_extent[i][0];
+    d.arc_end_m = model.defect_extent[i][1];
+    d.size_m = detail::DefectSize(spec, options.conductor_radius_m);
+    d.distance_m = stats.min_depth;
+    d.box = stats.box;
+    d.visible_pixels = stats.pixels;
+    result.defects.push_back(d);
   }
 
   // Radiance through the distorted raw cameras (and the ideal rectified ones); the sensor model is
@@ -154,6 +173,23 @@ nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles) {
   return {{"distance_definition", detail::kDistanceDefinition}, {"obstacles", list}};
 }
 
+nlohmann::json DefectsToJson(const std::vector<RenderedDefect>& defects) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const RenderedDefect& d : defects) {
+    nlohmann::json entry = {{"id", d.id},
+                            {"type", DefectTypeName(d.type)},
+                            {"arc_m", d.arc_m},
+                            {"arc_begin_m", d.arc_begin_m},
+                            {"arc_end_m", d.arc_end_m},
+                            {"size_m", d.size_m},
+                            {"box", {d.box.x, d.box.y, d.box.width, d.box.height}},
+                            {"visible_pixels", d.visible_pixels}};
+    entry["distance_m"] = std::isfinite(d.distance_m) ? nlohmann::json(d.distance_m) : nullptr;
+    list.push_back(entry);
+  }
+  return {{"defects", list}};
+}
+
 void WritePowerLineScene(const std::filesystem::path& dir, const PowerLineScene& scene) {
   detail::CreateOutputDirectory(dir);
   WriteImage(dir / "left.png", scene.left);
@@ -164,6 +200,10 @@ void WritePowerLineScene(const std::filesystem::path& dir, const PowerLineScene&
   WriteImage(dir / "obstacle_mask.png", scene.obstacle_mask);
   WriteImage(dir / "surface_class.png", scene.surface_class);
   WriteJson(dir / "obstacles.json", ObstaclesToJson(scene.obstacles));
+  if (!scene.defects.empty()) {
+    WriteJson(dir / "defects.json", DefectsToJson(scene.defects));
+    WriteImage(dir / "defect_mask.png", scene.defect_mask);
+  }
   if (!scene.rectified_left.empty()) {
     WriteImage(dir / "rectified_left.png", scene.rectified_left);
     WriteImage(dir / "rectified_right.png", scene.rectified_right);

@@ -39,6 +39,15 @@
 // short range. Obstacles are designed with a camera-facing front (damper weight end caps, clamp
 // body face, insulator disc rims), so the nearest surface is a patch, not a single point.
 //
+// Defects (DefectSpec) sit on conductor 0 at a given arc: damage to the conductor itself (a
+// "birdcage", where the outer strands have spread into a bulge, and broken outer strands whose cut
+// ends stand off the surface; SurfaceClass::kConductor) and foreign objects caught on it (a hanging
+// string, a plastic sheet, a bird's nest on top; SurfaceClass::kObstacle). They are not obstacles:
+// their pixels carry their id in PowerLineScene::defect_mask, never in obstacle_mask, and their
+// truth (RenderedDefect) gives their extent along the line, size, nearest visible depth and box. A
+// defect hides what is behind it, so it takes part in the placement of the obstacles like the
+// conductor does. Without defects (the default) nothing of the scene changes.
+//
 // Everything is deterministic: the same options (including the seed) give identical bytes on every
 // run and any number of threads.
 #pragma once
@@ -159,6 +168,63 @@ std::array<double, 2> ObstacleAlongExtent(ObstacleType type);
 // InputError naming the offending entry.
 std::vector<ObstacleSpec> ParseObstacleSpecs(std::string_view text);
 
+// Defects of conductor 0 (see the top of the file).
+enum class DefectType {
+  // Birdcage: the outer strands have opened into a bulge around the line (an ellipsoid around the
+  // axis with loose, gapped strands showing the dark inner layer).
+  kBirdcage,
+  // Broken strands: cut outer strands leave the surface and stand off it at their free ends.
+  kBrokenStrands,
+  // A string or rope wrapped around the conductor, hanging from it.
+  kHangingString,
+  // A plastic sheet wrapped over the conductor, hanging from it.
+  kPlasticSheet,
+  // A bird's nest sitting on top of the conductor.
+  kBirdNest,
+};
+
+// "birdcage", "broken_strands", "string", "sheet", "nest".
+std::string DefectTypeName(DefectType type);
+// Accepts the names above (also "broken-strands", "hanging_string", "plastic_sheet",
+// "bird_nest"); throws InputError listing the valid names.
+DefectType ParseDefectType(std::string_view name);
+std::vector<DefectType> AllDefectTypes();
+
+struct DefectSpec {
+  DefectType type = DefectType::kBirdcage;
+  // Arc length of its centre along conductor 0 (m; same origin as ObstacleSpec::arc_m: 0 = the
+  // point of conductor 0 nearest the left camera centre), in [-50, 0.9 * span_ahead_m].
+  double arc_m = 2.0;
+  // Birdcage: radius increase relative to the conductor radius, 0.05..1.0.
+  double swelling = 0.3;
+  // Birdcage: length along the line (0.03..0.5 m); string: hanging length (0.03..1.5 m); sheet:
+  // side of the (square-ish) sheet (0.03..0.6 m); nest: diameter (0.05..0.6 m).
+  double length_m = 0.15;
+  int strands = 1;  // broken strands: number of cut outer strands, 1..3
+  // Broken strands: how far the cut ends stand off the conductor surface (m), 0.002..0.08.
+  double standoff_m = 0.01;
+  // Direction around the line (deg, -360..360) in which the broken strands stick out and in which
+  // the string and the sheet hang: 0 = straight down (gravity side), 90 = to the side, 180 = up.
+  // A birdcage is round and a nest always sits on top, so they ignore it.
+  double angle_deg = 0.0;
+};
+
+// "birdcage:2.0:swelling=0.3:length=0.15,string:3.1:length=0.4,broken_strands:2.5:strands=2"
+// (type:arc_m[:key=value]..., comma separated). Keys: birdcage swelling, length; broken_strands
+// strands, standoff, angle; string length, angle; sheet length (or side), angle; nest length (or
+// diameter). Values are range-checked as in PowerLineSceneOptions::Check (but for the arc, whose
+// range depends on the span). Throws InputError naming the offending entry, key or value.
+std::vector<DefectSpec> ParseDefectSpecs(std::string_view text);
+
+// `count` defects (0..255) with types, arcs and sizes drawn from `seed`, sorted by arc: arcs in
+// [min_arc_m, max_arc_m] at least 0.5 m apart (they are not kept clear of obstacles); birdcage
+// swelling 0.1..0.5 and length 0.05..0.3 m; broken strands 1..3 strands, standoff 0.003..0.05 m,
+// angle 0..360 deg; string length 0.05..0.6 m; sheet side 0.05..0.4 m; string and sheet within +-30
+// deg of straight down; nest diameter 0.15..0.4 m. Throws InputError when `count` defects 0.5 m
+// apart do not fit into the range.
+std::vector<DefectSpec> RandomDefects(std::uint64_t seed, int count, double min_arc_m,
+                                      double max_arc_m);
+
 struct PowerLineSceneOptions {
   StereoRigOptions rig;
   SensorOptions sensor;
@@ -169,6 +235,9 @@ struct PowerLineSceneOptions {
   std::vector<ObstacleSpec> obstacles{{ObstacleType::kDamper, 1.5, 0},
                                       {ObstacleType::kSuspensionClamp, 3.0, 0},
                                       {ObstacleType::kInsulatorString, 4.5, 0}};
+  // Defects on conductor 0 (see the top of the file); none by default. At most 255 (8-bit id
+  // mask).
+  std::vector<DefectSpec> defects;
 
   // Conductors. The robot rides below conductor 0, so the camera sees it passing just above and
   // beside the lens: at z = 0 its axis is at (conductor_offset_x_m, conductor_offset_y_m) in the
@@ -258,6 +327,22 @@ struct RenderedObstacle {
   double near_arc_m = 0.0;
 };
 
+struct RenderedDefect {
+  int id = 0;  // value of its pixels in PowerLineScene::defect_mask (1-based, order of the specs)
+  DefectType type = DefectType::kBirdcage;
+  double arc_m = 0.0;  // arc of its centre (m, DefectSpec::arc_m)
+  // Its extent along the line (m of arc, same origin): the span of its surface projected on the
+  // line's tangent at its centre.
+  double arc_begin_m = 0.0, arc_end_m = 0.0;
+  // Birdcage: radius increase (m); broken strands: stand-off of the cut ends (m); string: hanging
+  // length (m); sheet: side (m); nest: diameter (m).
+  double size_m = 0.0;
+  // Min ground-truth depth Z_rect over its visible pixels (m; +inf when none is visible).
+  double distance_m = 0.0;
+  cv::Rect box;            // bounding box of its visible pixels in the rectified left image
+  int visible_pixels = 0;  // number of rectified left pixels showing it
+};
+
 // A point of a conductor's axis in the rectified left camera frame with its arc length (m, 0 at the
 // point of the conductor nearest to the left camera centre).
 struct ConductorAxisPoint {
@@ -275,6 +360,9 @@ struct PowerLineScene {
   cv::Mat obstacle_mask;  // rectified left, CV_8UC1: obstacle id (RenderedObstacle::id), 0 = none
   cv::Mat surface_class;  // rectified left, CV_8UC1: SurfaceClass of each pixel
   std::vector<RenderedObstacle> obstacles;  // one per spec, in spec order
+  // Rectified left, CV_8UC1: defect id (RenderedDefect::id), 0 = none; all zero without defects.
+  cv::Mat defect_mask;
+  std::vector<RenderedDefect> defects;      // one per spec, in spec order
   cv::Mat rectified_left, rectified_right;  // only with render_rectified_pair, CV_8UC3 BGR
   // Axis of conductor 0 (the robot's), sampled every 0.05 m of arc from -0.5 m to 20 m.
   std::vector<ConductorAxisPoint> conductor_axis;
@@ -308,6 +396,10 @@ class PowerLineSceneRenderer {
 // v], "box": [x, y, w, h], "visible_pixels"}]}.
 nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles);
 
+// Defects as JSON: {"defects": [{"id", "type", "arc_m", "arc_begin_m", "arc_end_m", "size_m",
+// "distance_m" (null when not visible), "box": [x, y, w, h], "visible_pixels"}]}.
+nlohmann::json DefectsToJson(const std::vector<RenderedDefect>& defects);
+
 // Writes into `dir` (created if missing; files written atomically):
 //   left.png, right.png        raw pair (8-bit BGR)
 //   stereo.yml                 true calibration (OpenCV FileStorage)
@@ -316,6 +408,8 @@ nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles);
 //   obstacle_mask.png          rectified left obstacle ids (8-bit, 0 = none)
 //   surface_class.png          rectified left SurfaceClass (8-bit)
 //   obstacles.json             ObstaclesToJson
+//   defects.json               DefectsToJson, only if the scene has defects
+//   defect_mask.png            rectified left defect ids (8-bit, 0 = none), only with defects
 //   rectified_left.png, rectified_right.png   only if rendered
 void WritePowerLineScene(const std::filesystem::path& dir, const PowerLineScene& scene);
 

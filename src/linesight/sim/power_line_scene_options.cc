@@ -1,4 +1,5 @@
-// Obstacle types and specs, and the checks of PowerLineSceneOptions (power_line_scene.h).
+// Obstacle types and specs, and the checks of PowerLineSceneOptions (power_line_scene.h; the
+// defect specs are checked by defect_specs.cc).
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -8,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "linesight/core/error.h"
+#include "linesight/sim/power_line_internal.h"
 #include "linesight/sim/power_line_scene.h"
 
 namespace linesight::sim {
@@ -112,6 +114,15 @@ void PowerLineSceneOptions::Check() const {
       CheckOption(std::isfinite(*o.arc_m) && *o.arc_m >= -5 && *o.arc_m <= 0.9 * span_ahead_m,
                   (name + ".arc_m").c_str(), *o.arc_m, "must be in [-5, 0.9 * span_ahead_m] m");
     }
+  }
+  CheckOption(defects.size() <= 255, "PowerLineSceneOptions.defects", defects.size(),
+              "at most 255 defects (8-bit id mask)");
+  for (size_t i = 0; i < defects.size(); ++i) {
+    const DefectSpec& d = defects[i];
+    const std::string name = fmt::format("PowerLineSceneOptions.defects[{}]", i);
+    CheckOption(std::isfinite(d.arc_m) && d.arc_m >= -50 && d.arc_m <= 0.9 * span_ahead_m,
+                (name + ".arc_m").c_str(), d.arc_m, "must be in [-50, 0.9 * span_ahead_m] m");
+    detail::CheckDefectSpec(d, name);
   }
   CheckOption(std::fabs(conductor_offset_x_m) <= 2, "PowerLineSceneOptions.conductor_offset_x_m",
               conductor_offset_x_m, "must be in [-2, 2] m");

@@ -38,6 +38,8 @@ void PowerLineSequenceOptions::Check() const {
               "PowerLineSequenceOptions.start_gap_m", start_gap_m, "must be in (end_gap_m, 30] m");
   CheckOption(num_obstacles >= 1 && num_obstacles <= 6, "PowerLineSequenceOptions.num_obstacles",
               num_obstacles, "must be in [1, 6]");
+  CheckOption(num_defects >= 0 && num_defects <= 6, "PowerLineSequenceOptions.num_defects",
+              num_defects, "must be in [0, 6]");
   CheckOption(std::isfinite(min_spacing_m) && min_spacing_m >= 0.3,
               "PowerLineSequenceOptions.min_spacing_m", min_spacing_m, "must be >= 0.3 m");
   CheckOption(std::isfinite(max_spacing_m) && max_spacing_m >= min_spacing_m && max_spacing_m <= 10,
@@ -75,6 +77,16 @@ PowerLineSequence::PowerLineSequence(const PowerLineSequenceOptions& options) : 
   CheckOption(layout_.back().arc_m - travelled < 0.9 * (options.scene.span_ahead_m - travelled),
               "PowerLineSequenceOptions.num_obstacles", options.num_obstacles,
               "must fit before the next tower");
+  if (options.num_defects > 0) {
+    // A stream of its own: the obstacles and the motion are those of the sequence without defects.
+    constexpr double kFirstDefectArc = 0.5;
+    const double last_arc = layout_.back().arc_m;
+    CheckOption(last_arc - kFirstDefectArc >= 0.5 * (options.num_defects - 1),
+                "PowerLineSequenceOptions.num_defects", options.num_defects,
+                "must fit 0.5 m apart between the robot's start and the last obstacle");
+    defects_ = RandomDefects(detail::Mix64(options.seed ^ 0xdefec75e9ULL), options.num_defects,
+                             kFirstDefectArc, last_arc);
+  }
 }
 
 PowerLineSceneOptions PowerLineSequence::FrameOptions(int index) const {
@@ -100,6 +112,8 @@ PowerLineSceneOptions PowerLineSequence::FrameOptions(int index) const {
     spec.arc_m = entry.arc_m - travelled;
     o.obstacles.push_back(spec);
   }
+  o.defects = defects_;
+  for (DefectSpec& defect : o.defects) defect.arc_m -= travelled;
   return o;
 }
 
@@ -119,10 +133,27 @@ nlohmann::json SequenceFrameTruthToJson(int index, double timestamp_s, double tr
     entry["distance_m"] = std::isfinite(o.distance_m) ? nlohmann::json(o.distance_m) : nullptr;
     list.push_back(entry);
   }
-  return {{"frame", index},
-          {"timestamp_s", timestamp_s},
-          {"travelled_m", travelled_m},
-          {"obstacles", list}};
+  nlohmann::json truth = {{"frame", index},
+                          {"timestamp_s", timestamp_s},
+                          {"travelled_m", travelled_m},
+                          {"obstacles", list}};
+  if (!scene.defects.empty()) {
+    nlohmann::json defects = nlohmann::json::array();
+    for (const RenderedDefect& d : scene.defects) {
+      nlohmann::json entry = {{"id", d.id},
+                              {"type", DefectTypeName(d.type)},
+                              {"arc_distance_m", d.arc_m},
+                              {"arc_begin_m", d.arc_begin_m},
+                              {"arc_end_m", d.arc_end_m},
+                              {"size_m", d.size_m},
+                              {"box", {d.box.x, d.box.y, d.box.width, d.box.height}},
+                              {"visible_pixels", d.visible_pixels}};
+      entry["distance_m"] = std::isfinite(d.distance_m) ? nlohmann::json(d.distance_m) : nullptr;
+      defects.push_back(entry);
+    }
+    truth["defects"] = defects;
+  }
+  return truth;
 }
 
 void WritePowerLineSequence(const std::filesystem::path& dir, const PowerLineSequence& sequence,
@@ -147,17 +178,31 @@ void WritePowerLineSequence(const std::filesystem::path& dir, const PowerLineSeq
   for (const SequenceLayoutEntry& e : sequence.layout()) {
     layout.push_back({{"type", ObstacleTypeName(e.type)}, {"arc_m", e.arc_m}});
   }
-  WriteJson(dir / "sequence.json", {{"seed", o.seed},
-                                    {"frames", count},
-                                    {"fps", o.fps},
-                                    {"speed_mps", o.speed_mps},
-                                    {"start_gap_m", o.start_gap_m},
-                                    {"end_gap_m", o.end_gap_m},
-                                    {"pitch_jitter_deg", o.pitch_jitter_deg},
-                                    {"roll_jitter_deg", o.roll_jitter_deg},
-                                    {"bounce_m", o.bounce_m},
-                                    {"supersampling", o.scene.sensor.supersampling},
-                                    {"layout", layout}});
+  nlohmann::json description = {{"seed", o.seed},
+                                {"frames", count},
+                                {"fps", o.fps},
+                                {"speed_mps", o.speed_mps},
+                                {"start_gap_m", o.start_gap_m},
+                                {"end_gap_m", o.end_gap_m},
+                                {"pitch_jitter_deg", o.pitch_jitter_deg},
+                                {"roll_jitter_deg", o.roll_jitter_deg},
+                                {"bounce_m", o.bounce_m},
+                                {"supersampling", o.scene.sensor.supersampling},
+                                {"layout", layout}};
+  if (!sequence.defects().empty()) {
+    nlohmann::json defects = nlohmann::json::array();
+    for (const DefectSpec& d : sequence.defects()) {
+      defects.push_back({{"type", DefectTypeName(d.type)},
+                         {"arc_m", d.arc_m},
+                         {"swelling", d.swelling},
+                         {"length_m", d.length_m},
+                         {"strands", d.strands},
+                         {"standoff_m", d.standoff_m},
+                         {"angle_deg", d.angle_deg}});
+    }
+    description["defects"] = defects;
+  }
+  WriteJson(dir / "sequence.json", description);
 }
 
 }  // namespace linesight::sim

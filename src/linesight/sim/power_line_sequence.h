@@ -10,10 +10,16 @@
 // rolls and bounces by smooth seeded oscillations (a slow sway and a faster vibration). Frames
 // are independent of each other (any frame renders alone, in any order, to the same bytes).
 //
+// Optionally, defects of conductor 0 (a birdcage, broken strands, a hanging string, a plastic
+// sheet, a nest; power_line_scene.h) are fixed on the line too, drawn from a seed derived from the
+// sequence's seed (so the obstacles and the motion do not depend on them) between the robot's
+// start and the last obstacle; they move through the frames like the obstacles.
+//
 // Truth per frame (PowerLineScene::obstacles): each obstacle's type, near-end arc length from
 // the robot (`near_arc_m`, the distance along the line the robot travels before it reaches it),
 // straight distance (`distance_m`, the nearest visible surface along the rectified optical axis,
-// +inf when not in view), box and mask; and the conductor's axis (`conductor_axis`).
+// +inf when not in view), box and mask; the conductor's axis (`conductor_axis`); and each defect's
+// arc, extent, size, nearest visible depth, box and mask (PowerLineScene::defects).
 #pragma once
 
 #include <cstdint>
@@ -40,6 +46,10 @@ struct PowerLineSequenceOptions {
   double start_gap_m = 6.0;
   double end_gap_m = 0.4;
   int num_obstacles = 3;  // 1..6, types drawn from the seed (damper, clamp, insulator)
+  // Defects on conductor 0, 0..6: types, sizes and arcs (0.5 m apart, from 0.5 m ahead of the
+  // robot's start to the centre of the last obstacle) drawn by RandomDefects from a seed derived
+  // from `seed`.
+  int num_defects = 0;
   // Clear arc between one obstacle's far end and the next one's near end (m), drawn uniformly.
   double min_spacing_m = 1.0;
   double max_spacing_m = 2.5;
@@ -65,6 +75,8 @@ class PowerLineSequence {
   // Distance the robot has travelled along the line at frame `index` (m).
   double TravelledAt(int index) const { return options_.speed_mps * TimestampOf(index); }
   const std::vector<SequenceLayoutEntry>& layout() const { return layout_; }
+  // The defects with their arcs from the robot's START position (m); empty without num_defects.
+  const std::vector<DefectSpec>& defects() const { return defects_; }
   const PowerLineSequenceOptions& options() const { return options_; }
 
   // The scene options of frame `index` (0 <= index < size()).
@@ -75,21 +87,24 @@ class PowerLineSequence {
  private:
   PowerLineSequenceOptions options_;
   std::vector<SequenceLayoutEntry> layout_;
+  std::vector<DefectSpec> defects_;
   std::vector<double> phases_;  // of the motion oscillations
   int frames_ = 0;
 };
 
 // Truth of one frame as JSON: {"frame", "timestamp_s", "travelled_m", "obstacles": [{"id",
 // "type", "arc_distance_m" (near end), "distance_m" (straight, null when not visible), "box",
-// "visible_pixels"}]}.
+// "visible_pixels"}]}, and when the scene has defects "defects": [{"id", "type", "arc_distance_m"
+// (centre, from the robot), "arc_begin_m", "arc_end_m" (its extent, from the robot), "size_m",
+// "distance_m" (null when not visible), "box", "visible_pixels"}].
 nlohmann::json SequenceFrameTruthToJson(int index, double timestamp_s, double travelled_m,
                                         const PowerLineScene& scene);
 
 // Writes the sequence into `dir`: stereo.yml (the true calibration), left_NNNN.png and
 // right_NNNN.png per frame (a pair `--source images:DIR/left_*.png,DIR/right_*.png` replays),
-// truth.jsonl (one SequenceFrameTruthToJson line per frame) and sequence.json (options and
-// layout). Writes the first `max_frames` frames (0 = all). `progress(done, total)` is called after
-// every frame.
+// truth.jsonl (one SequenceFrameTruthToJson line per frame) and sequence.json (options, layout
+// and, when there are defects, the defects). Writes the first `max_frames` frames (0 = all).
+// `progress(done, total)` is called after every frame.
 void WritePowerLineSequence(const std::filesystem::path& dir, const PowerLineSequence& sequence,
                             int max_frames = 0, const std::function<void(int, int)>& progress = {});
 

@@ -100,6 +100,87 @@ TEST(PowerLineSequence, RenderedTruthApproachesAndFramesAreIndependent) {
   EXPECT_DOUBLE_EQ(truth["obstacles"][0]["distance_m"].get<double>(), near.obstacles[0].distance_m);
 }
 
+// Defects come from a stream of their own: the obstacles, the motion and the noise are those of
+// the same sequence without them; they move with the line and every frame has their truth.
+TEST(PowerLineSequence, DefectsComeWithTruthAndLeaveTheObstaclesAlone) {
+  PowerLineSequenceOptions o = FastSequence(4);
+  const PowerLineSequence plain(o);
+  o.num_defects = 2;
+  const PowerLineSequence defective(o);
+  EXPECT_TRUE(plain.defects().empty());
+  ASSERT_EQ(defective.defects().size(), 2u);
+  ASSERT_EQ(defective.size(), plain.size());
+  ASSERT_EQ(defective.layout().size(), plain.layout().size());
+  for (size_t i = 0; i < plain.layout().size(); ++i) {
+    EXPECT_EQ(defective.layout()[i].type, plain.layout()[i].type);
+    EXPECT_EQ(defective.layout()[i].arc_m, plain.layout()[i].arc_m);
+  }
+  for (const DefectSpec& d : defective.defects()) {
+    EXPECT_GE(d.arc_m, 0.5);
+    EXPECT_LE(d.arc_m, defective.layout().back().arc_m);
+  }
+  EXPECT_GE(defective.defects()[1].arc_m - defective.defects()[0].arc_m, 0.5 - 1e-12);
+  for (int k : {0, 7}) {
+    const PowerLineSceneOptions a = plain.FrameOptions(k);
+    const PowerLineSceneOptions b = defective.FrameOptions(k);
+    EXPECT_TRUE(a.defects.empty());
+    ASSERT_EQ(b.defects.size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+      EXPECT_NEAR(b.defects[i].arc_m, defective.defects()[i].arc_m - defective.TravelledAt(k),
+                  1e-12);
+      EXPECT_EQ(b.defects[i].type, defective.defects()[i].type);
+    }
+    ASSERT_EQ(a.obstacles.size(), b.obstacles.size());
+    for (size_t i = 0; i < a.obstacles.size(); ++i) {
+      EXPECT_EQ(a.obstacles[i].type, b.obstacles[i].type);
+      EXPECT_EQ(*a.obstacles[i].arc_m, *b.obstacles[i].arc_m);
+    }
+    EXPECT_EQ(a.conductor_pitch_rad, b.conductor_pitch_rad);
+    EXPECT_EQ(a.conductor_roll_rad, b.conductor_roll_rad);
+    EXPECT_EQ(a.conductor_offset_y_m, b.conductor_offset_y_m);
+    EXPECT_EQ(a.sensor.noise_seed, b.sensor.noise_seed);
+    EXPECT_EQ(a.span_ahead_m, b.span_ahead_m);
+  }
+  // Rendered truth: the defects with their arcs from the robot; the obstacles where they were.
+  const int k = 4;
+  const PowerLineScene with = defective.Render(k);
+  const PowerLineScene without = plain.Render(k);
+  ASSERT_EQ(with.defects.size(), 2u);
+  ASSERT_EQ(with.obstacles.size(), without.obstacles.size());
+  for (size_t i = 0; i < with.obstacles.size(); ++i) {
+    EXPECT_EQ(with.obstacles[i].type, without.obstacles[i].type);
+    EXPECT_EQ(with.obstacles[i].near_arc_m, without.obstacles[i].near_arc_m);
+  }
+  const nlohmann::json truth =
+      SequenceFrameTruthToJson(k, defective.TimestampOf(k), defective.TravelledAt(k), with);
+  ASSERT_TRUE(truth.contains("defects"));
+  ASSERT_EQ(truth["defects"].size(), 2u);
+  int visible = 0;
+  for (size_t i = 0; i < 2; ++i) {
+    const nlohmann::json& d = truth["defects"][i];
+    const RenderedDefect& r = with.defects[i];
+    EXPECT_EQ(d["id"], static_cast<int>(i) + 1);
+    EXPECT_EQ(d["type"], DefectTypeName(defective.defects()[i].type));
+    EXPECT_NEAR(d["arc_distance_m"].get<double>(),
+                defective.defects()[i].arc_m - defective.TravelledAt(k), 1e-12);
+    EXPECT_LT(d["arc_begin_m"].get<double>(), d["arc_distance_m"].get<double>());
+    EXPECT_GT(d["arc_end_m"].get<double>(), d["arc_distance_m"].get<double>());
+    EXPECT_DOUBLE_EQ(d["size_m"].get<double>(), r.size_m);
+    EXPECT_EQ(d["visible_pixels"], r.visible_pixels);
+    EXPECT_EQ(d["box"][0], r.box.x);
+    if (r.visible_pixels > 0) {
+      ++visible;
+      EXPECT_DOUBLE_EQ(d["distance_m"].get<double>(), r.distance_m);
+    } else {
+      EXPECT_TRUE(d["distance_m"].is_null());
+    }
+  }
+  EXPECT_GT(visible, 0);
+  const nlohmann::json plain_truth =
+      SequenceFrameTruthToJson(k, plain.TimestampOf(k), plain.TravelledAt(k), without);
+  EXPECT_FALSE(plain_truth.contains("defects"));
+}
+
 TEST(PowerLineSequence, RejectsBadOptionsNamingTheField) {
   auto expect_rejected = [](auto change, const std::string& field) {
     PowerLineSequenceOptions o;
@@ -115,6 +196,15 @@ TEST(PowerLineSequence, RejectsBadOptionsNamingTheField) {
   expect_rejected([](auto& o) { o.fps = -1; }, "fps");
   expect_rejected([](auto& o) { o.end_gap_m = 7; }, "start_gap_m");
   expect_rejected([](auto& o) { o.num_obstacles = 9; }, "num_obstacles");
+  expect_rejected([](auto& o) { o.num_defects = 7; }, "num_defects");
+  expect_rejected([](auto& o) { o.num_defects = -1; }, "num_defects");
+  expect_rejected(
+      [](auto& o) {
+        o.num_obstacles = 1;
+        o.start_gap_m = 1.0;
+        o.num_defects = 3;
+      },
+      "num_defects");
   expect_rejected([](auto& o) { o.max_spacing_m = 0.5; }, "max_spacing_m");
   expect_rejected([](auto& o) { o.bounce_m = 1; }, "bounce_m");
   expect_rejected([](auto& o) { o.scene.span_ahead_m = 12; }, "span_ahead_m");

@@ -67,6 +67,12 @@ enum class Material : std::uint8_t {
   kTowerSteel,     // lattice members
   kChessboard,     // calibration target (rectangle coordinates give the pattern)
   kWall,           // backdrop behind calibration boards
+  kBirdcage,       // outer strands of a conductor spread into a bulge (ellipsoid frame, arc_offset,
+                   // reference): loose strands with dark gaps onto the inner layer
+  kLooseStrand,    // one aluminium wire of a broken outer strand
+  kRope,           // twisted synthetic rope (a cable: arc_offset and reference)
+  kPlasticSheet,   // thin, creased plastic film
+  kNest,           // twigs and straw of a bird's nest
 };
 
 struct Shape {
@@ -74,6 +80,7 @@ struct Shape {
   Material material = Material::kGalvanised;
   std::uint8_t surface_class = 0;  // SurfaceClass
   std::uint8_t obstacle_id = 0;    // 0 = not part of an obstacle
+  std::uint8_t defect_id = 0;      // 0 = not part of a conductor defect
   Vec3 p0, p1;
   double r0 = 0, r1 = 0;
   Mat3 frame;  // rows of the transposed frame: Apply() maps world -> local

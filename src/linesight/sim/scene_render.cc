@@ -1,6 +1,7 @@
 #include "linesight/sim/scene_render.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -62,6 +63,93 @@ double StrandProfile(const Shape& shape, Vec3 p, int strands, double lay_length,
   return (0.45 + 0.55 * crest) * per_strand;
 }
 
+// Birdcage: the conductor's helix continued onto the bulge (same phase, per-wire brightness and
+// dirt, so it joins the conductor's texture), every wire keeping its width while the circumference
+// grows: dark gaps open between the loosened wires onto the inner layer, laid the other way.
+Vec3 BirdcageAlbedo(const ShadingEnvironment& env, const Shape& shape, Vec3 p, std::uint64_t seed) {
+  const Vec3 axis = shape.frame.r0;
+  const Vec3 rel = p - shape.p0;
+  const double along = Dot(rel, axis);
+  const Vec3 radial = rel - along * axis;
+  const Vec3 e1 = shape.reference;
+  const Vec3 e2 = Cross(axis, e1);
+  const double turn = std::atan2(Dot(radial, e2), Dot(radial, e1)) / (2.0 * std::numbers::pi);
+  const double arc = shape.arc_offset + along;
+  const int strands = env.conductor_strands;
+  const double phase = strands * (turn + arc / env.conductor_lay_length_m);
+  const auto index = static_cast<std::int64_t>(std::floor(phase));
+  const std::int64_t strand = ((index % strands) + strands) % strands;
+  const double f = phase - std::floor(phase);
+  const double width = std::clamp(shape.r0 / std::max(Norm(radial), 1e-9), 0.2, 1.0);
+  const double dirt = 0.78 + 0.3 * FractalNoise(45.0 * p, 4, seed + 11);
+  const double opened = 1.0 - 0.3 * (1.0 - width);  // weathered inside, exposed by the opening
+  // Each wire wanders inside its widened slot.
+  const double centre = 0.5 + (LatticeHash(strand, 1, 0, seed) - 0.5) * (1.0 - width);
+  const double x = (f - centre) / (0.5 * width);
+  if (std::fabs(x) < 1.0) {
+    const double crest = std::sqrt(std::max(0.0, std::cos(0.5 * std::numbers::pi * x)));
+    const double per_strand = 0.9 + 0.2 * LatticeHash(strand, 0, 0, seed);
+    return Vec3{0.56, 0.57, 0.58} * ((0.45 + 0.55 * crest) * per_strand * dirt * opened);
+  }
+  const double inner_phase = (strands - 6) * (turn - arc / env.conductor_lay_length_m);
+  const double inner = std::sqrt(
+      std::max(0.0, std::sin(std::numbers::pi * (inner_phase - std::floor(inner_phase)))));
+  return Vec3{0.30, 0.30, 0.29} * ((0.25 + 0.45 * inner) * dirt);
+}
+
+// Bird's nest: a 3D tangle of straight twigs, 4 mm thick, in four directions. For each direction
+// space is cut into cells across it; a cell holds a twig (centre jittered within the cell) in
+// segments of random presence along it, so a surface shows long streaks where it runs along a
+// direction and dots where it cuts across. The brightest twig wins; between twigs lies dark shadow.
+Vec3 NestAlbedo(Vec3 p, std::uint64_t seed) {
+  struct TwigAxes {
+    Vec3 along, u, v;
+  };
+  static const auto kAxes = [] {
+    std::array<TwigAxes, 4> axes;
+    const Vec3 directions[] = {
+        {1.0, 0.25, 0.15}, {0.2, 0.3, 1.0}, {-0.6, 0.35, 0.7}, {0.7, -0.45, -0.5}};
+    for (int k = 0; k < 4; ++k) {
+      const Vec3 d = Normalized(directions[k]);
+      const Vec3 helper = std::fabs(d.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+      const Vec3 u = Normalized(Cross(d, helper));
+      axes[k] = {d, u, Cross(d, u)};
+    }
+    return axes;
+  }();
+  constexpr double kCellsPerMetre = 250.0;  // 4 mm twigs
+  constexpr double kSegmentCells = 14.0;    // twig pieces about 5.6 cm long
+  double best = 0.0;
+  double tone = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const TwigAxes& axes = kAxes[k];
+    const double x = kCellsPerMetre * Dot(p, axes.along);
+    const double a = kCellsPerMetre * Dot(p, axes.u), b = kCellsPerMetre * Dot(p, axes.v);
+    const auto ia = static_cast<std::int64_t>(std::floor(a));
+    const auto ib = static_cast<std::int64_t>(std::floor(b));
+    const std::uint64_t twig_seed = seed + 500 + 17 * k;
+    const double shift = kSegmentCells * LatticeHash(ia, ib, -1, twig_seed);
+    const auto segment = static_cast<std::int64_t>(std::floor((x + shift) / kSegmentCells));
+    const double presence = LatticeHash(ia, ib, segment, twig_seed + 1);
+    if (presence > 0.6) continue;
+    const double ca = 0.5 + 0.3 * (LatticeHash(ia, ib, segment, twig_seed + 2) - 0.5);
+    const double cb = 0.5 + 0.3 * (LatticeHash(ia, ib, segment, twig_seed + 3) - 0.5);
+    const double da = a - static_cast<double>(ia) - ca, db = b - static_cast<double>(ib) - cb;
+    const double r2 = (da * da + db * db) / (0.42 * 0.42);
+    if (r2 >= 1.0) continue;
+    const double shade = std::sqrt(1.0 - r2) * (0.7 + 0.5 * presence);
+    if (shade > best) {
+      best = shade;
+      tone = LatticeHash(ia, ib, segment, twig_seed + 4);
+    }
+  }
+  // Dry brown and weathered grey twigs, some straw.
+  Vec3 colour = Mix(Vec3{0.33, 0.24, 0.15}, Vec3{0.42, 0.40, 0.37}, Smoothstep(0.5, 0.8, tone));
+  if (tone > 0.85) colour = Vec3{0.62, 0.54, 0.33};
+  const double grain = 0.8 + 0.3 * FractalNoise(600.0 * p, 2, seed + 510);
+  return colour * ((0.15 + 0.85 * best) * grain);
+}
+
 Vec3 Albedo(const RenderScene& scene, const Shape& shape, Vec3 p) {
   const ShadingEnvironment& env = scene.environment;
   const std::uint64_t seed = env.seed + static_cast<std::uint64_t>(shape.texture_seed * 1000.0);
@@ -120,6 +208,38 @@ Vec3 Albedo(const RenderScene& scene, const Shape& shape, Vec3 p) {
       const double grain = FractalNoise(6.0 * p, 3, seed + 81);
       return Vec3{0.42, 0.40, 0.37} * (0.7 + 0.5 * grain);
     }
+    case Material::kBirdcage:
+      return BirdcageAlbedo(env, shape, p, seed);
+    case Material::kLooseStrand: {
+      const double grain = FractalNoise(220.0 * p, 3, seed + 71);
+      return Vec3{0.62, 0.63, 0.64} * (0.7 + 0.4 * grain);
+    }
+    case Material::kRope: {
+      // Three twisted strands of a synthetic rope in one of a few faded colours.
+      static constexpr Vec3 kColours[] = {{0.55, 0.13, 0.10},
+                                          {0.13, 0.22, 0.48},
+                                          {0.70, 0.38, 0.08},
+                                          {0.16, 0.30, 0.16},
+                                          {0.09, 0.09, 0.09}};
+      const auto pick = static_cast<size_t>(LatticeHash(0, 0, 0, seed + 301) * 5.0);
+      const double strands = StrandProfile(shape, p, 3, 0.02, seed);
+      const double fibres = 0.8 + 0.3 * FractalNoise(400.0 * p, 2, seed + 302);
+      return kColours[std::min<size_t>(pick, 4)] * (strands * fibres);
+    }
+    case Material::kPlasticSheet: {
+      // Light film with creases (ridges of a noise field) and a little dirt.
+      static constexpr Vec3 kColours[] = {
+          {0.86, 0.86, 0.84}, {0.62, 0.74, 0.84}, {0.80, 0.80, 0.66}, {0.74, 0.76, 0.76}};
+      const auto pick = static_cast<size_t>(LatticeHash(0, 0, 0, seed + 401) * 4.0);
+      const double fold = FractalNoise(18.0 * p, 3, seed + 402);
+      const double crease = std::pow(1.0 - std::fabs(2.0 * fold - 1.0), 8.0);
+      const double dirt = Smoothstep(0.6, 0.8, FractalNoise(9.0 * p, 3, seed + 403));
+      const double grain = FractalNoise(90.0 * p, 2, seed + 404);
+      return kColours[std::min<size_t>(pick, 3)] *
+             (0.86 + 0.12 * grain - 0.22 * crease - 0.25 * dirt);
+    }
+    case Material::kNest:
+      return NestAlbedo(p, seed);
   }
   return {0.5, 0.5, 0.5};
 }
@@ -269,13 +389,17 @@ cv::Mat RenderLinearImage(const RenderScene& scene, const CameraIntrinsics& intr
 
 void TraceGroundTruth(const RenderScene& scene, const CameraIntrinsics& pinhole,
                       const PosedCamera& camera, cv::Size size, cv::Rect roi, cv::Mat* depth,
-                      cv::Mat* surface_class, cv::Mat* obstacle_id) {
+                      cv::Mat* surface_class, cv::Mat* obstacle_id, cv::Mat* defect_id) {
   depth->create(size, CV_32FC1);
   depth->setTo(std::numeric_limits<float>::infinity());
   surface_class->create(size, CV_8UC1);
   surface_class->setTo(0);
   obstacle_id->create(size, CV_8UC1);
   obstacle_id->setTo(0);
+  if (defect_id != nullptr) {
+    defect_id->create(size, CV_8UC1);
+    defect_id->setTo(0);
+  }
   roi &= cv::Rect(0, 0, size.width, size.height);
   if (roi.empty()) return;
   cv::parallel_for_(
@@ -285,6 +409,7 @@ void TraceGroundTruth(const RenderScene& scene, const CameraIntrinsics& pinhole,
           auto* z = depth->ptr<float>(v);
           auto* cls = surface_class->ptr<unsigned char>(v);
           auto* id = obstacle_id->ptr<unsigned char>(v);
+          auto* defect = defect_id != nullptr ? defect_id->ptr<unsigned char>(v) : nullptr;
           for (int u = roi.x; u < roi.x + roi.width; ++u) {
             const Vec3 direction =
                 Normalized({(u - pinhole.cx) / pinhole.fx, (v - pinhole.cy) / pinhole.fy, 1.0});
@@ -298,6 +423,7 @@ void TraceGroundTruth(const RenderScene& scene, const CameraIntrinsics& pinhole,
               const Shape& shape = scene.geometry.shape(hit.shape);
               cls[u] = shape.surface_class;
               id[u] = shape.obstacle_id;
+              if (defect != nullptr) defect[u] = shape.defect_id;
             }
           }
         }

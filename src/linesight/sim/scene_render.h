@@ -44,10 +44,11 @@ cv::Mat RenderLinearImage(const RenderScene& scene, const CameraIntrinsics& intr
 
 // Ground truth through a pinhole camera (no distortion), one ray per pixel centre inside `roi`:
 // depth = Z in the camera frame (+inf where nothing is hit), the shape's surface class and obstacle
-// id. Outputs are allocated at `size` (CV_32FC1, CV_8UC1, CV_8UC1) and filled inside `roi` only;
-// outside it depth is +inf and the labels 0.
+// id, and when `defect_id` is given the shape's defect id. Outputs are allocated at `size`
+// (CV_32FC1, CV_8UC1, CV_8UC1, CV_8UC1) and filled inside `roi` only; outside it depth is +inf and
+// the labels 0.
 void TraceGroundTruth(const RenderScene& scene, const CameraIntrinsics& pinhole,
                       const PosedCamera& camera, cv::Size size, cv::Rect roi, cv::Mat* depth,
-                      cv::Mat* surface_class, cv::Mat* obstacle_id);
+                      cv::Mat* surface_class, cv::Mat* obstacle_id, cv::Mat* defect_id = nullptr);
 
 }  // namespace linesight::sim::detail

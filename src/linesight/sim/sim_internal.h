@@ -1,7 +1,9 @@
 // Internal to the sim module: pieces shared by the power-line scene and the calibration boards.
 #pragma once
 
+#include <array>
 #include <filesystem>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -38,6 +40,9 @@ struct PowerLineSceneModel {
   RenderScene scene;
   std::vector<double> surface_min_depth;  // per obstacle spec: min Z_rect over its surface
   std::vector<double> arc;                // per obstacle spec: arc length of its centre (m)
+  // Per defect spec: arc of its surface's near and far end along the line (m, DefectSpec::arc_m's
+  // origin).
+  std::vector<std::array<double, 2>> defect_extent;
   std::vector<ConductorAxisPoint> conductor_axis;  // conductor 0, rectified left frame
 };
 PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& options);
