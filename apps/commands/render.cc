@@ -44,10 +44,9 @@ int RunRender(int argc, char** argv) {
   CLI::App app{
       "Render the synthetic power-line scene seen by a MYNT S1030-like stereo rig: raw pair, true "
       "calibration, rectified ground-truth disparity/depth, obstacle masks and distances; "
-      "optionally "
-      "calibration boards.",
+      "optionally conductor defects (--defects) and calibration boards.",
       "render"};
-  std::string out_dir, obstacles_text, board_text = "9x6:0.04", json_path;
+  std::string out_dir, obstacles_text, defects_text, board_text = "9x6:0.04", json_path;
   sim::PowerLineSceneOptions options;
   std::uint64_t seed = options.seed;
   std::optional<std::uint64_t> noise_seed;
@@ -63,6 +62,16 @@ int RunRender(int argc, char** argv) {
                  "type:distance_m[:conductor],... with type damper|clamp|insulator; distance = "
                  "nearest visible surface along the rectified optical axis (default "
                  "damper:1.5,clamp:3,insulator:4.5; 'none' for no obstacles)");
+  app.add_option(
+      "--defects", defects_text,
+      "defects of conductor 0, type:arc_m[:key=value]...,... with arc_m the arc length of the "
+      "centre from the point of the line nearest the camera; types and keys: birdcage "
+      "(swelling=0.05..1 relative radius increase, length=0.03..0.5 m), broken_strands "
+      "(strands=1..3, standoff=0.002..0.08 m, angle=deg around the line, 0 = down, 90 = side, "
+      "180 = up), string (length=0.03..1.5 m hanging, angle), sheet (length=0.03..0.6 m side, "
+      "angle), nest (length=0.05..0.6 m diameter); e.g. "
+      "birdcage:2:swelling=0.3:length=0.15,string:3.1:length=0.4 (writes defects.json, "
+      "defect_mask.png)");
   app.add_option("--noise", options.sensor.noise_sigma_dn, "Gaussian read noise sigma (DN)")
       ->capture_default_str();
   app.add_option("--shot-noise", options.sensor.shot_noise_electrons,
@@ -112,11 +121,20 @@ int RunRender(int argc, char** argv) {
   app.add_option("--num-obstacles", sequence_options.num_obstacles,
                  "sequence: obstacles on the line (types and gaps from --seed)")
       ->capture_default_str();
+  app.add_option("--num-defects", sequence_options.num_defects,
+                 "sequence: defects of conductor 0 (0..6; types, sizes and arcs between the start "
+                 "and the last obstacle from --seed; per-frame truth under \"defects\" in "
+                 "truth.jsonl)")
+      ->capture_default_str();
   app.add_option("--json", json_path, "machine-readable report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {
     if (sequence_frames) {
       if (!obstacles_text.empty() || boards + boards_left_only + boards_right_only > 0) {
         throw UsageError("--sequence draws its obstacles from --seed: drop --obstacles/--boards");
+      }
+      if (!defects_text.empty()) {
+        throw UsageError(
+            "--sequence draws its defects from --seed: use --num-defects, not --defects");
       }
       options.towers = !no_towers;
       sequence_options.scene = options;
@@ -137,6 +155,10 @@ int RunRender(int argc, char** argv) {
         std::fprintf(stdout, "%-10s centre at %.3f m of arc from the start\n",
                      sim::ObstacleTypeName(e.type).c_str(), e.arc_m);
       }
+      for (const sim::DefectSpec& d : sequence.defects()) {
+        std::fprintf(stdout, "%-14s defect centre at %.3f m of arc from the start\n",
+                     sim::DefectTypeName(d.type).c_str(), d.arc_m);
+      }
       if (!json_path.empty()) {
         nlohmann::json report;
         report["out"] = out_dir;
@@ -147,9 +169,19 @@ int RunRender(int argc, char** argv) {
           layout.push_back({{"type", sim::ObstacleTypeName(e.type)}, {"arc_m", e.arc_m}});
         }
         report["layout"] = layout;
+        if (!sequence.defects().empty()) {
+          nlohmann::json defects = nlohmann::json::array();
+          for (const sim::DefectSpec& d : sequence.defects()) {
+            defects.push_back({{"type", sim::DefectTypeName(d.type)}, {"arc_m", d.arc_m}});
+          }
+          report["defects"] = defects;
+        }
         WriteJson(json_path, report);
       }
       return;
+    }
+    if (sequence_options.num_defects != 0) {
+      throw UsageError("--num-defects is for --sequence; a still scene takes --defects");
     }
     options.seed = seed;
     options.sensor.noise_seed = noise_seed;
@@ -159,6 +191,7 @@ int RunRender(int argc, char** argv) {
     } else if (!obstacles_text.empty()) {
       options.obstacles = sim::ParseObstacleSpecs(obstacles_text);
     }
+    if (!defects_text.empty()) options.defects = sim::ParseDefectSpecs(defects_text);
     options.Check();
     sim::CalibrationBoardOptions board_options;
     const bool want_boards = boards + boards_left_only + boards_right_only > 0;
@@ -206,6 +239,19 @@ int RunRender(int argc, char** argv) {
                    fmt::format("{},{},{},{}", o.box.x, o.box.y, o.box.width, o.box.height).c_str(),
                    o.visible_pixels);
     }
+    if (!scene.defects.empty()) {
+      std::fprintf(table, "%-3s %-14s %8s %16s %12s %10s %22s %8s\n", "id", "defect", "arc_m",
+                   "extent_m", "size_m", "distance_m", "box (x,y,w,h)", "pixels");
+      for (const sim::RenderedDefect& d : scene.defects) {
+        std::fprintf(
+            table, "%-3d %-14s %8.3f %16s %12.4f %10.4f %22s %8d\n", d.id,
+            sim::DefectTypeName(d.type).c_str(), d.arc_m,
+            fmt::format("{:.3f}..{:.3f}", d.arc_begin_m, d.arc_end_m).c_str(), d.size_m,
+            d.distance_m,
+            fmt::format("{},{},{},{}", d.box.x, d.box.y, d.box.width, d.box.height).c_str(),
+            d.visible_pixels);
+      }
+    }
     std::fprintf(stderr, "render: scene %.0f ms%s, written to %s\n", scene_ms,
                  want_boards
                      ? fmt::format(", {} board views {:.0f} ms", board_views, boards_ms).c_str()
@@ -221,6 +267,7 @@ int RunRender(int argc, char** argv) {
       report["scene_ms"] = scene_ms;
       report["board_views"] = board_views;
       report["boards_ms"] = boards_ms;
+      if (!scene.defects.empty()) report["defects"] = sim::DefectsToJson(scene.defects)["defects"];
       WriteJson(json_path, report);
     }
   });
