@@ -10,6 +10,7 @@ int RunEval(int argc, char** argv);
 int RunRectify(int argc, char** argv);
 int RunCloud(int argc, char** argv);
 int RunRange(int argc, char** argv);
+int RunInspect(int argc, char** argv);
 int RunEvalRanging(int argc, char** argv);  // `linesight eval ranging`, dispatched by eval.cc
 int RunBench(int argc, char** argv);
 int RunCalibrate(int argc, char** argv);
@@ -22,6 +23,7 @@ int RunEvalReport(int argc, char** argv);     // `linesight eval report`, dispat
 int RunEvalObstacles(int argc, char** argv);  // `linesight eval obstacles`, dispatched by eval.cc
 int RunEvalPlates(int argc, char** argv);     // `linesight eval plates`, dispatched by eval.cc
 int RunEvalSequences(int argc, char** argv);  // `linesight eval sequences`, dispatched by eval.cc
+int RunEvalFaults(int argc, char** argv);     // `linesight eval faults`, dispatched by eval.cc
 int RunServe(int argc, char** argv);
 int RunAcquire(int argc, char** argv);
 int RunBatch(int argc, char** argv);

@@ -28,6 +28,8 @@ constexpr Subcommand kSubcommands[] = {
      "point cloud (PLY, metres) and depth PNG from a disparity map"},
     {"range", linesight::cli::RunRange,
      "distance +- sigma to obstacles in ROIs or found automatically"},
+    {"inspect", linesight::cli::RunInspect,
+     "the robot's conductor: radius profile along the line and bird-caging"},
     {"bench", linesight::cli::RunBench,
      "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
     {"render", linesight::cli::RunRender,

@@ -127,6 +127,8 @@ constexpr Study kStudies[] = {
      "ranging on an independent renderer's plates / boxes (photograph textures)"},
     {"sequences", RunEvalSequences,
      "obstacle awareness on moving power-line sequences (detection, type, distance, tracks)"},
+    {"faults", RunEvalFaults,
+     "conductor faults on sequences with seeded defects (recall by type, distance, size)"},
     {"report", RunEvalReport, "run every study and write docs/results/README.md"},
 };
 
