@@ -130,6 +130,20 @@ bool ReadPngHeader(PngReadStructs& s, PngSource* source, PngHeader* h) {
 
 enum class PixelsRead { kOk, kCorrupt, kLayoutMismatch };
 
+// The decoder's status for how its pixels were read; `out` becomes the image when they were.
+DecodeStatus Finish(PixelsRead read, const cv::Mat& out, cv::Mat* image) {
+  switch (read) {
+    case PixelsRead::kOk:
+      *image = out;
+      return DecodeStatus::kDecoded;
+    case PixelsRead::kCorrupt:
+      return DecodeStatus::kCorrupt;
+    case PixelsRead::kLayoutMismatch:
+      return DecodeStatus::kNotHandled;
+  }
+  return DecodeStatus::kNotHandled;
+}
+
 // The transformations of OpenCV's PngDecoder::readData, in its order.
 PixelsRead ReadPngPixels(PngReadStructs& s, const PngHeader& h, int type, png_bytepp rows,
                          size_t row_bytes) {
@@ -177,16 +191,7 @@ DecodeStatus DecodePng(std::span<const uint8_t> bytes, int flags, cv::Mat* image
   cv::Mat out(static_cast<int>(header.height), static_cast<int>(header.width), type);
   std::vector<png_bytep> rows(header.height);
   for (int y = 0; y < out.rows; ++y) rows[y] = out.ptr<uint8_t>(y);
-  switch (ReadPngPixels(s, header, type, rows.data(), out.cols * out.elemSize())) {
-    case PixelsRead::kOk:
-      *image = out;
-      return DecodeStatus::kDecoded;
-    case PixelsRead::kCorrupt:
-      return DecodeStatus::kCorrupt;
-    case PixelsRead::kLayoutMismatch:
-      return DecodeStatus::kNotHandled;
-  }
-  return DecodeStatus::kNotHandled;
+  return Finish(ReadPngPixels(s, header, type, rows.data(), out.cols * out.elemSize()), out, image);
 }
 
 struct PngWriteStructs {
@@ -366,16 +371,7 @@ DecodeStatus DecodeJpeg(std::span<const uint8_t> bytes, int flags, cv::Mat* imag
   const int native = d.cinfo.num_components > 1 ? CV_8UC3 : CV_8UC1;
   cv::Mat out(static_cast<int>(d.cinfo.output_height), static_cast<int>(d.cinfo.output_width),
               TypeForFlags(native, flags));
-  switch (ReadJpegPixels(d, &out)) {
-    case PixelsRead::kOk:
-      *image = out;
-      return DecodeStatus::kDecoded;
-    case PixelsRead::kCorrupt:
-      return DecodeStatus::kCorrupt;
-    case PixelsRead::kLayoutMismatch:
-      return DecodeStatus::kNotHandled;
-  }
-  return DecodeStatus::kNotHandled;
+  return Finish(ReadJpegPixels(d, &out), out, image);
 }
 
 struct JpegCompress {

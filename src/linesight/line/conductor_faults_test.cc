@@ -15,13 +15,6 @@
 namespace linesight {
 namespace {
 
-RangingPipelineOptions FaultChainOnOneThread() {
-  RangingPipelineOptions o;
-  o.threads = 1;
-  o.params = LineMatcherParams(o.method, o.params);
-  return o;
-}
-
 struct Inspected {
   sim::PowerLineScene scene;
   LineObstacles line;
@@ -30,7 +23,7 @@ struct Inspected {
 
 Inspected InspectScene(const sim::PowerLineScene& scene) {
   Inspected out{scene, {}, {}};
-  const RangingPipeline pipeline(scene.calibration, FaultChainOnOneThread());
+  const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
   const RangingFrame frame = pipeline.Process(scene.left, scene.right);
   out.line = FindLineObstacles(pipeline, frame, {});
   out.inspection =

@@ -13,14 +13,6 @@
 namespace linesight {
 namespace {
 
-// The chain the line stages run on (LineMatcherParams), on one thread.
-RangingPipelineOptions MatchOnOneThread() {
-  RangingPipelineOptions o;
-  o.threads = 1;
-  o.params = LineMatcherParams(o.method, o.params);
-  return o;
-}
-
 // The found obstacle that matches `truth`: boxes overlap and the distance along the line within
 // 5 %; the nearest along the line of those, -1 if none.
 int MatchTruth(const LineObstacles& found, const sim::RenderedObstacle& truth) {
@@ -49,7 +41,7 @@ TEST(LineObstaclesTest, FindsTheNearestObstacleOnTheLineWithTypeAndDistances) {
     const sim::PowerLineSequence sequence(testing::FastSequence(seed));
     for (int index = 140; index < sequence.size(); index += 20) {
       const sim::PowerLineScene scene = sequence.Render(index);
-      const RangingPipeline pipeline(scene.calibration, MatchOnOneThread());
+      const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
       const RangingFrame frame = pipeline.Process(scene.left, scene.right);
       const LineObstacles found = FindLineObstacles(pipeline, frame, {});
       ASSERT_TRUE(found.conductor.ok()) << found.conductor.reason;
@@ -126,7 +118,7 @@ TEST(LineObstaclesTest, AnInsulatorStringIsJoinedToItsClampAndTypedAsAString) {
         continue;
       }
       ++scored;
-      const RangingPipeline pipeline(scene.calibration, MatchOnOneThread());
+      const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
       const LineObstacles found =
           FindLineObstacles(pipeline, pipeline.Process(scene.left, scene.right), {});
       const int k = MatchTruth(found, truth);
@@ -146,7 +138,7 @@ TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   sim::PowerLineSceneOptions scene_options;
   scene_options.sensor.supersampling = 1;
   const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
-  const RangingPipeline pipeline(scene.calibration, MatchOnOneThread());
+  const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
   RangingFrame frame = pipeline.Process(scene.left, scene.right);
   frame.disparity.setTo(std::numeric_limits<float>::infinity());
   frame.checked_disparity = frame.disparity;

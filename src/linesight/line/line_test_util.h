@@ -1,8 +1,10 @@
-// The moving power-line sequence as the line tests render it.
+// The moving power-line sequence and the matching chain as the line tests use them.
 #pragma once
 
 #include <cstdint>
 
+#include "linesight/line/line_obstacles.h"
+#include "linesight/ranging/pipeline.h"
 #include "linesight/sim/power_line_sequence.h"
 
 namespace linesight::testing {
@@ -13,6 +15,14 @@ inline sim::PowerLineSequenceOptions FastSequence(std::uint64_t seed) {
   sim::PowerLineSequenceOptions o;
   o.seed = seed;
   o.scene.sensor.supersampling = 1;
+  return o;
+}
+
+// The chain the line stages run on (LineMatcherParams), on one thread.
+inline RangingPipelineOptions LineChainOnOneThread() {
+  RangingPipelineOptions o;
+  o.threads = 1;
+  o.params = LineMatcherParams(o.method, o.params);
   return o;
 }
 

@@ -138,18 +138,11 @@ nlohmann::json SequenceFrameTruthToJson(int index, double timestamp_s, double tr
                           {"travelled_m", travelled_m},
                           {"obstacles", list}};
   if (!scene.defects.empty()) {
-    nlohmann::json defects = nlohmann::json::array();
-    for (const RenderedDefect& d : scene.defects) {
-      nlohmann::json entry = {{"id", d.id},
-                              {"type", DefectTypeName(d.type)},
-                              {"arc_distance_m", d.arc_m},
-                              {"arc_begin_m", d.arc_begin_m},
-                              {"arc_end_m", d.arc_end_m},
-                              {"size_m", d.size_m},
-                              {"box", {d.box.x, d.box.y, d.box.width, d.box.height}},
-                              {"visible_pixels", d.visible_pixels}};
-      entry["distance_m"] = std::isfinite(d.distance_m) ? nlohmann::json(d.distance_m) : nullptr;
-      defects.push_back(entry);
+    // The still scene's fields, its centre arc named as the distance along the line from the robot.
+    nlohmann::json defects = DefectsToJson(scene.defects)["defects"];
+    for (nlohmann::json& entry : defects) {
+      entry["arc_distance_m"] = entry["arc_m"];
+      entry.erase("arc_m");
     }
     truth["defects"] = defects;
   }
