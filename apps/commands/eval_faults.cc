@@ -58,15 +58,7 @@ int RunEvalFaults(int argc, char** argv) {
     options.pipeline.params = ParseParams(raw_params);
     options.faults.max_arc_m = std::max(options.faults.max_arc_m, options.max_arc_m + 0.5);
     options.Check();
-    int total = 0;
-    for (std::uint64_t seed : options.seeds) {
-      sim::PowerLineSequenceOptions o = options.sequence;
-      o.seed = seed;
-      const int n = sim::PowerLineSequence(o).size();
-      const int frames = options.max_frames > 0 ? std::min(options.max_frames, n) : n;
-      total += (frames + options.frame_step - 1) / options.frame_step;
-    }
-    ProgressBar progress(total, "eval faults");
+    ProgressBar progress(FaultStudyFrames(options), "eval faults");
     FaultStudyReport report = RunFaultStudy(options, &progress);
     progress.Finish();
     report.command = command;

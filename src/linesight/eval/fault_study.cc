@@ -34,6 +34,17 @@ double SizeOf(const sim::RenderedDefect& truth, double radius_m) {
   return truth.type == sim::DefectType::kBirdcage ? truth.size_m / radius_m : truth.size_m;
 }
 
+sim::PowerLineSequence SequenceOf(const FaultStudyOptions& options, std::uint64_t seed) {
+  sim::PowerLineSequenceOptions o = options.sequence;
+  o.seed = seed;
+  return sim::PowerLineSequence(o);
+}
+
+// The frames of `sequence` the study scores (before the frame step).
+int FramesOf(const FaultStudyOptions& options, const sim::PowerLineSequence& sequence) {
+  return options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
+}
+
 std::string Percent(const FaultRates& r) {
   return r.scored ? fmt::format("{:.2f} ({}/{})", r.recall(), r.matched, r.scored) : "-";
 }
@@ -69,6 +80,15 @@ nlohmann::json FaultRates::ToJson() const {
           {"type_accuracy", type_accuracy()}};
 }
 
+int FaultStudyFrames(const FaultStudyOptions& options) {
+  int total = 0;
+  for (std::uint64_t seed : options.seeds) {
+    const int n = FramesOf(options, SequenceOf(options, seed));
+    total += (n + options.frame_step - 1) / options.frame_step;
+  }
+  return total;
+}
+
 FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* progress) {
   options.Check();
   const auto start = std::chrono::steady_clock::now();
@@ -100,11 +120,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
   std::vector<double> radius_errors;
 
   for (std::uint64_t seed : options.seeds) {
-    sim::PowerLineSequenceOptions sequence_options = options.sequence;
-    sequence_options.seed = seed;
-    const sim::PowerLineSequence sequence(sequence_options);
-    const int n =
-        options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
+    const sim::PowerLineSequence sequence = SequenceOf(options, seed);
+    const int n = FramesOf(options, sequence);
     ConductorModel previous;
     for (int index = 0; index < n; index += options.frame_step) {
       const sim::PowerLineScene scene = sequence.Render(index);

@@ -86,6 +86,9 @@ struct FaultStudyReport {
   void WritePlots(const std::filesystem::path& dir) const;
 };
 
+// The frames RunFaultStudy scores (for a progress bar).
+int FaultStudyFrames(const FaultStudyOptions& options);
+
 FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* progress = nullptr);
 
 }  // namespace linesight

@@ -158,7 +158,6 @@ CrossSection MeasureCrossSection(const cv::Mat& image, cv::Point2d p, cv::Point2
 
 struct Stretch {
   int first = 0, last = 0;  // sample indices
-  int side = 0;
 };
 
 // Runs of flagged samples, joined across gaps of at most `gap_m` of arc.
@@ -170,7 +169,7 @@ std::vector<Stretch> Runs(const std::vector<RadiusSample>& profile,
     if (!runs.empty() && profile[i].arc_m - profile[runs.back().last].arc_m <= gap_m) {
       runs.back().last = i;
     } else {
-      runs.push_back({i, i, 0});
+      runs.push_back({i, i});
     }
   }
   return runs;
@@ -284,7 +283,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
   const ConductorCurve& curve = line.conductor.line;
   const CurveLocator locator(curve);
   const double nominal_radius = curve.radius_m > 0 ? curve.radius_m : 0.014;
-  std::vector<double> profile, depth_match;
+  std::vector<double> profile;
   for (double tau = std::ceil(curve.tau_min); tau <= curve.tau_max; tau += 1.0) {
     const double d = curve.DisparityAt(tau);
     if (!(d > 0.5)) continue;
