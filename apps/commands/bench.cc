@@ -50,10 +50,11 @@ int RunBench(int argc, char** argv) {
   bool chain = false;
   ChainBenchOptions chain_options;
   std::string calib_path, finder = "line";
-  app.add_flag("--chain", chain,
-               "measure the live chain instead (what serve does per frame: grab, rectify, match, "
-               "find and range, encode) on the demo's scene, or on --left/--right with --calib; "
-               "default methods isgm,sgm,sgbm, ratios against sgbm through the same chain");
+  app.add_flag(
+      "--chain", chain,
+      "measure the live chain instead (what serve does per frame: grab, rectify, match, "
+      "find and range, inspect, encode) on the demo's scene, or on --left/--right with --calib; "
+      "default methods isgm,sgm,sgbm, ratios against sgbm through the same chain");
   app.add_option("--calib", calib_path, "--chain: calibration of --left/--right");
   app.add_option("--frames", chain_options.frames, "--chain: timed frames per method")
       ->capture_default_str();

@@ -82,6 +82,9 @@ int RunServe(int argc, char** argv) {
                  "automatic finding: line (the obstacles on the robot's conductor, typed, along "
                  "the line) or regions (every region thicker than a conductor, for any rig)")
       ->capture_default_str();
+  app.add_flag("--inspect,!--no-inspect", options.inspect,
+               "line finder: inspect the conductor in every frame (bird-caging) and list the "
+               "faults seen recently with a crop each (default on)");
   app.add_option("--alarm-distance", options.alarm_distance_m,
                  "alarm when an obstacle on the line is nearer than this along the line (m)")
       ->capture_default_str();

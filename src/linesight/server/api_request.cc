@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -52,6 +53,28 @@ bool ParseRecordRequest(const std::string& body) {
     throw InputError("'on' must be true (start a new recording) or false (stop it)");
   }
   return j["on"].get<bool>();
+}
+
+int ParseFaultImageName(const std::string& name) {
+  constexpr std::string_view kSuffix = ".jpg";
+  const std::string_view text(name);
+  const auto refuse = [&] {
+    // The name is echoed back shortened: the answer stays small whatever the URL holds.
+    const std::string shown = name.size() > 40 ? name.substr(0, 40) + "..." : name;
+    return InputError(fmt::format(
+        "'{}' is not a fault crop: expected <id>.jpg with the id (1, 2, ...) of a fault in the "
+        "result's line.inspection.faults",
+        shown));
+  };
+  if (text.size() <= kSuffix.size() || text.substr(text.size() - kSuffix.size()) != kSuffix) {
+    throw refuse();
+  }
+  const std::string_view digits = text.substr(0, text.size() - kSuffix.size());
+  if (digits.size() > 9 || digits.front() == '0' ||
+      !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    throw refuse();
+  }
+  return std::stoi(std::string(digits));
 }
 
 RoiRequest ParseRoiRequest(const std::string& body, cv::Size image) {

@@ -25,4 +25,8 @@ double ParseAlarmRequest(const std::string& body);
 // What POST /api/record carries: {"on": true|false}. InputError otherwise.
 bool ParseRecordRequest(const std::string& body);
 
+// The last part of GET /api/fault/<id>.jpg: "<id>.jpg" with a positive decimal id (no sign, no
+// leading zero, at most 9 digits). InputError naming what was expected otherwise.
+int ParseFaultImageName(const std::string& name);
+
 }  // namespace linesight

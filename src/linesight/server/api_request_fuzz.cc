@@ -1,6 +1,7 @@
-// libFuzzer target for the base station's API request parsers (build with -DLINESIGHT_FUZZ=ON and
-// clang, see CMakeLists.txt). Every input must parse or throw InputError; anything else (a crash,
-// a sanitizer report, another exception, an ROI outside the image) is a finding.
+// libFuzzer target for the base station's API request parsers: the POST bodies and the name in
+// GET /api/fault/<id>.jpg (build with -DLINESIGHT_FUZZ=ON and clang, see CMakeLists.txt). Every
+// input must parse or throw InputError; anything else (a crash, a sanitizer report, another
+// exception, an ROI outside the image, a fault id below 1) is a finding.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -28,6 +29,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     (void)linesight::ParseRecordRequest(body);
+  } catch (const linesight::InputError&) {
+  }
+  try {
+    const int id = linesight::ParseFaultImageName(body);
+    if (id < 1) std::abort();
   } catch (const linesight::InputError&) {
   }
   return 0;

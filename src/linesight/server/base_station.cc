@@ -10,6 +10,7 @@
 #include <memory>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <opencv2/imgproc.hpp>
 
 #include "linesight/core/error.h"
@@ -23,6 +24,9 @@ namespace linesight {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// GET /api/fault/<id>.jpg: the crops of the kept faults.
+constexpr const char* kFaultCropPrefix = "/api/fault/";
 
 JpegBytes EncodeJpeg(const cv::Mat& image, int quality) {
   auto bytes = std::make_shared<std::vector<uint8_t>>();
@@ -57,6 +61,8 @@ void BaseStationOptions::Check() const {
   tracker.Check();
   line.Check();
   line_tracker.Check();
+  faults.Check();
+  fault_log.Check();
   CheckOption(alarm_distance_m >= 0.05 && alarm_distance_m <= 100,
               "BaseStationOptions.alarm_distance_m", alarm_distance_m, "must be in [0.05, 100] m");
   CheckOption(jpeg_quality >= 1 && jpeg_quality <= 100, "BaseStationOptions.jpeg_quality",
@@ -74,8 +80,8 @@ void BaseStationOptions::Check() const {
 }
 
 nlohmann::json StageTimes::ToJson() const {
-  return {{"grab", grab},     {"rectify", rectify}, {"match", match},    {"range", range},
-          {"health", health}, {"encode", encode},   {"latency", latency}};
+  return {{"grab", grab},       {"rectify", rectify}, {"match", match},   {"range", range},
+          {"inspect", inspect}, {"health", health},   {"encode", encode}, {"latency", latency}};
 }
 
 BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
@@ -87,6 +93,7 @@ BaseStation::BaseStation(std::unique_ptr<FrameSource> source,
       auto_detect_(options.auto_detect),
       tracker_(options.tracker),
       line_tracker_(options.line_tracker),
+      fault_log_(options.fault_log),
       alarm_distance_m_(options.alarm_distance_m) {
   options_.Check();
   if (!calibration) calibration = source_->Calibration();
@@ -324,7 +331,23 @@ void BaseStation::RangeAndPublish(MatchedFrame matched) {
     conductor_ = on_line.conductor;
   }
   stages.range = watch.ElapsedMs();
-  const double process_ms = stages.rectify + stages.match + stages.range;
+
+  // The conductor inspected on the same frame, with the matcher's checked disparity as
+  // `linesight inspect` does; the crops are encoded here, outside the lock.
+  const bool inspect = line_mode && options_.inspect;
+  std::optional<ConductorInspection> inspection;
+  std::vector<JpegBytes> fault_crops;
+  if (inspect) {
+    watch.Restart();
+    inspection =
+        InspectConductor(ranged.left_rectified, ranged.right_rectified, ranged.checked_disparity,
+                         on_line, pipeline_->geometry(), options_.faults);
+    for (const ConductorFault& f : inspection->faults) {
+      fault_crops.push_back(EncodeFaultCrop(ranged.left_rectified, f.box, options_.fault_log));
+    }
+    stages.inspect = watch.ElapsedMs();
+  }
+  const double process_ms = stages.rectify + stages.match + stages.range + stages.inspect;
 
   // Calibration health, on the first frame and every health_every_frames after it.
   std::optional<RowAlignment> health;
@@ -395,6 +418,13 @@ void BaseStation::RangeAndPublish(MatchedFrame matched) {
           {"distance_definition",
            "arc_m: distance along the conductor from the robot to the obstacle's near "
            "end (m); distance_m: depth of its nearest visible surface (m)"}};
+      result["line"]["inspection"] =
+          inspection
+              ? LogFaults(*inspection, line_tracks, frame->index, frame->timestamp_s, fault_crops)
+              : nlohmann::json{{"status", "off"},
+                               {"reason", "the conductor is not inspected (--no-inspect)"},
+                               {"faults", nlohmann::json::array()},
+                               {"in_frame", nlohmann::json::array()}};
     }
   }
 
@@ -432,6 +462,7 @@ void BaseStation::RangeAndPublish(MatchedFrame matched) {
                                   {&stage_average_.rectify, stages.rectify},
                                   {&stage_average_.match, stages.match},
                                   {&stage_average_.range, stages.range},
+                                  {&stage_average_.inspect, stages.inspect},
                                   {&stage_average_.health, stages.health},
                                   {&stage_average_.encode, stages.encode},
                                   {&stage_average_.latency, stages.latency}}) {
@@ -451,6 +482,46 @@ void BaseStation::RangeAndPublish(MatchedFrame matched) {
   }
   published_.notify_all();
   recorder_.Add(frame->left, frame->right, result);
+}
+
+// Feeds the frame's faults to the fault log (under the lock) and returns the result's
+// "inspection": the inspection's summary, this frame's faults with the id each was merged into, and
+// the faults kept. The robot's speed along the line is the median approach rate of the tracked
+// obstacles, which are fixed to the line like the faults.
+nlohmann::json BaseStation::LogFaults(const ConductorInspection& inspection,
+                                      const std::vector<LineTrack>& line_tracks, int64_t frame,
+                                      double timestamp_s, const std::vector<JpegBytes>& crops) {
+  std::optional<double> speed;
+  if (!line_tracks.empty()) {
+    std::vector<double> rates;
+    for (const LineTrack& t : line_tracks) rates.push_back(t.approach_mps);
+    std::nth_element(rates.begin(), rates.begin() + long(rates.size() / 2), rates.end());
+    speed = rates[rates.size() / 2];
+  }
+  const std::vector<int> ids =
+      fault_log_.Update(frame, timestamp_s, inspection.faults, crops, speed);
+  nlohmann::json j = inspection.ToJson();
+  j["reason"] = inspection.reason;
+  nlohmann::json in_frame = nlohmann::json::array();
+  for (size_t i = 0; i < inspection.faults.size(); ++i) {
+    nlohmann::json f = inspection.faults[i].ToJson();
+    f["id"] = ids[i];
+    in_frame.push_back(std::move(f));
+  }
+  j.erase("faults");
+  j["in_frame"] = std::move(in_frame);
+  nlohmann::json kept = nlohmann::json::array();
+  for (const LoggedFault& f : fault_log_.faults()) kept.push_back(f.ToJson(kFaultCropPrefix));
+  j["faults"] = std::move(kept);
+  j["max_faults"] = fault_log_.options().max_faults;
+  j["robot_speed_mps"] = fault_log_.robot_speed_mps();
+  j["definition"] =
+      "faults: the faults seen recently, the most recently seen first, merged over frames by their "
+      "arc along the line; arc_m: arc from the robot to the fault's centre at its last sighting "
+      "(m); arc_now_m: where it is expected now (m, < 0 = passed); length_m: its extent along the "
+      "line; size_m: the radius increase (m); in_frame: this frame's faults, with the id of the "
+      "kept fault each was merged into";
+  return j;
 }
 
 JpegBytes BaseStation::DrawAnnotated(const cv::Mat& left_rectified,
@@ -498,6 +569,16 @@ JpegBytes BaseStation::DrawAnnotated(const cv::Mat& left_rectified,
       labels.erase(labels.begin());
     }
     DrawLabelledBoxes(view, boxes, labels, cv::Scalar(41, 180, 240));
+    if (line.contains("inspection")) {
+      std::vector<cv::Rect> fault_boxes;
+      std::vector<std::string> fault_labels;
+      for (const nlohmann::json& f : line["inspection"]["in_frame"]) {
+        fault_boxes.push_back(box_of(f["box"]));
+        fault_labels.push_back(fmt::format("fault {} {} {:.2f} m", f["id"].get<int>(),
+                                           f["type"].get<std::string>(), f["arc_m"].get<double>()));
+      }
+      DrawLabelledBoxes(view, fault_boxes, fault_labels, cv::Scalar(220, 90, 230));
+    }
   }
   std::vector<cv::Rect> boxes;
   std::vector<std::string> labels;
@@ -565,6 +646,7 @@ nlohmann::json BaseStation::Status() const {
           {"rois", rois},
           {"auto", auto_detect_},
           {"finder", AutoFinderName(options_.finder)},
+          {"inspect", options_.finder == AutoFinder::kLine && options_.inspect},
           {"alarm_distance_m", alarm_distance_m_},
           {"calibration_health", calibration_health},
           {"recording", recorder_.Status()}};
@@ -582,6 +664,24 @@ void BaseStation::SetRois(const RoiRequest& request) {
   if (request.rois) rois_ = *request.rois;
   if (request.auto_detect) auto_detect_ = *request.auto_detect;
   settings_changed_ = true;
+}
+
+JpegBytes BaseStation::FaultCrop(int id) const {
+  std::lock_guard lock(mutex_);
+  const LoggedFault* fault = fault_log_.Find(id);
+  if (fault == nullptr) {
+    std::vector<int> ids;
+    for (const LoggedFault& f : fault_log_.faults()) ids.push_back(f.id);
+    throw InputError(fmt::format(
+        "no fault {} is kept: the base station keeps the {} faults seen most recently ({})", id,
+        fault_log_.options().max_faults,
+        ids.empty() ? std::string("none now")
+        : ids.size() <= 20
+            ? fmt::format("ids now: {}", fmt::join(ids, ", "))
+            : fmt::format("ids now: {}, ...", fmt::join(ids.begin(), ids.begin() + 20, ", "))));
+  }
+  if (!fault->crop) throw InputError(fmt::format("fault {} has no crop (its box is empty)", id));
+  return fault->crop;
 }
 
 void BaseStation::SetPaused(bool paused) {
@@ -743,7 +843,9 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
   const std::string bearer = options.token.empty() ? "" : "Bearer " + options.token;
   http.set_pre_routing_handler([bearer, routes](const httplib::Request& req,
                                                 httplib::Response& res) {
-    const auto route = routes->find(req.path);
+    // The fault crops are one route under a prefix (GET /api/fault/<id>.jpg).
+    const bool fault_crop = req.path.rfind(kFaultCropPrefix, 0) == 0;
+    const auto route = routes->find(fault_crop ? std::string(kFaultCropPrefix) : req.path);
     if (route == routes->end()) return httplib::Server::HandlerResponse::Unhandled;
     const bool allowed =
         req.method == route->second || (req.method == "HEAD" && route->second == "GET");
@@ -822,6 +924,15 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
   get("/api/frame/disparity.jpg", [station](const httplib::Request&, httplib::Response& res) {
     SendJpeg(res, station->Snapshot().disparity_jpeg);
   });
+  (*routes)[kFaultCropPrefix] = "GET";
+  http.Get(std::string(kFaultCropPrefix) + "([^/]*)",
+           [station](const httplib::Request& req, httplib::Response& res) {
+             try {
+               SendJpeg(res, station->FaultCrop(ParseFaultImageName(req.matches[1].str())));
+             } catch (const InputError& e) {
+               SendError(res, 404, e.what());
+             }
+           });
   post("/api/rois", [station](const httplib::Request& req, httplib::Response& res) {
     try {
       station->SetRois(ParseRoiRequest(req.body, station->image_size()));
@@ -864,11 +975,12 @@ BaseStationServer::BaseStationServer(BaseStation* station, const BaseStationServ
     station->SetPaused(false);
     SendJson(res, station->Status());
   });
-  // Errors that httplib answers itself get a JSON body too.
+  // Errors that httplib answers itself get a JSON body too (a handler's own error keeps its own).
   http.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+    if (!res.body.empty()) return;
     if (res.status == 404) {
       SendError(res, 404, fmt::format("no such resource: {} {}", req.method, req.path));
-    } else if (res.body.empty() && res.status >= 400) {
+    } else if (res.status >= 400) {
       const std::string what =
           res.status == 413   ? fmt::format("the request body is over {} kB", kMaxBodyBytes / 1024)
           : res.status == 414 ? "the request URL is too long"

@@ -15,12 +15,17 @@
 //                             tracks (confirmed ones seen in this frame, and every ROI track);
 //                             in line mode "line": the conductor (status, image curve), this
 //                             frame's obstacles, the tracks nearest along the line first, the
-//                             alarm distance and whether the nearest track is within it
+//                             alarm distance and whether the nearest track is within it, and
+//                             "inspection": the conductor inspected (status, reason, inspected
+//                             length), this frame's faults and the faults seen recently, merged
+//                             over frames by their arc along the line (server/fault_log.h)
 //   GET  /api/events          server-sent events: "frame" {"status", "result"} for every
 //                             published frame, "status" once a second while none is (so a
 //                             client sees a stale, paused or ended source)
 //   GET  /api/frame/left.jpg  newest rectified left image (JPEG)
 //   GET  /api/frame/disparity.jpg  its disparity, colour-mapped (JPEG)
+//   GET  /api/fault/<id>.jpg  a crop of the rectified left image around a kept fault at its last
+//                             sighting (JPEG); 404 with the reason for an id that is not kept
 //   GET  /api/stream.mjpeg    MJPEG stream (multipart/x-mixed-replace) of every frame:
 //                             ?view=annotated (default: conductor, obstacles, ROIs drawn), left,
 //                             disparity; plays in a browser, VLC or ffplay
@@ -30,10 +35,10 @@
 //                             under the server's record folder (server/recorder.h), or stop it
 //   POST /api/pause, /api/resume
 //
-// /api/status reports per-stage timing (grab, rectify, match, range, health, encode; moving
-// averages, ms), the end-to-end latency from a frame in hand to its result published, the age of
-// the newest result and "stale" when it is older than 5 frame periods (at least 2 s) while the
-// source should be delivering, the calibration's health (row alignment of the rectified pair,
+// /api/status reports per-stage timing (grab, rectify, match, range, inspect, health, encode;
+// moving averages, ms), the end-to-end latency from a frame in hand to its result published, the
+// age of the newest result and "stale" when it is older than 5 frame periods (at least 2 s) while
+// the source should be delivering, the calibration's health (row alignment of the rectified pair,
 // rectify/row_alignment.h, with its recent history) and the recording's state.
 //
 // Every API error answers 4xx with {"error": "<what is wrong>"}: 404 for an unknown path, 405 (with
@@ -60,12 +65,14 @@
 
 #include "linesight/acquire/frame_source.h"
 #include "linesight/core/timer.h"
+#include "linesight/line/conductor_faults.h"
 #include "linesight/line/line_obstacles.h"
 #include "linesight/line/line_tracker.h"
 #include "linesight/ranging/pipeline.h"
 #include "linesight/rectify/row_alignment.h"
 #include "linesight/server/api_request.h"
 #include "linesight/server/distance_tracker.h"
+#include "linesight/server/fault_log.h"
 #include "linesight/server/recorder.h"
 
 namespace linesight {
@@ -86,6 +93,11 @@ struct BaseStationOptions {
   AutoFinder finder = AutoFinder::kLine;
   LineObstacleOptions line;
   LineTrackerOptions line_tracker;
+  // In line mode, inspect the conductor of every frame (InspectConductor: bird-caging) and keep
+  // the faults seen recently (FaultLog, with a crop each).
+  bool inspect = true;
+  ConductorFaultOptions faults;
+  FaultLogOptions fault_log;
   // An obstacle on the line nearer than this along the line raises the alarm (m, 0.05..100).
   double alarm_distance_m = 1.0;
   // Automatic detections whose sigma_m exceeds this share of their distance are reported but not
@@ -117,6 +129,7 @@ struct StageTimes {
   double rectify = 0;  // rectification
   double match = 0;    // dense matching
   double range = 0;    // ROIs, automatic finding, the conductor and its obstacles
+  double inspect = 0;  // the conductor's inspection and its faults' crops (line mode)
   double health = 0;   // the calibration-health measure (on the frames that take it)
   double encode = 0;   // colour map and JPEG encoding for the page
   double latency = 0;  // from the pair in hand to its result published (everything but grab)
@@ -124,13 +137,11 @@ struct StageTimes {
   nlohmann::json ToJson() const;
 };
 
-using JpegBytes = std::shared_ptr<const std::vector<uint8_t>>;
-
 // The newest published result.
 struct BaseStationSnapshot {
   int64_t frame_index = -1;  // -1 until the first frame is processed
   double timestamp_s = 0;
-  double process_ms = 0;  // rectify + match + range of this frame
+  double process_ms = 0;  // rectify + match + range + inspect of this frame
   double fps = 0;         // processed frames per second (moving average, wall clock)
   StageTimes stages;      // this frame's
   // Shared, never changed once published: readers keep them without copying.
@@ -166,6 +177,9 @@ class BaseStation {
   BaseStationSnapshot Snapshot() const;
   nlohmann::json Status() const;
   void SetRois(const RoiRequest& request);
+  // The crop of the kept fault `id` (FaultLog). Throws InputError saying why when no fault of
+  // that id is kept or it has no crop.
+  JpegBytes FaultCrop(int id) const;
   void SetAlarmDistance(double distance_m);  // OptionError outside 0.05..100 m
   void SetPaused(bool paused);
   // Starts (a new folder under BaseStationOptions::record_dir) or stops recording; throws
@@ -197,6 +211,9 @@ class BaseStation {
   std::optional<MatchedFrame> GrabAndMatch();  // nullopt when the source has ended
   void RangeAndPublish(MatchedFrame matched);
   JpegBytes DrawAnnotated(const cv::Mat& left_rectified, const nlohmann::json& result) const;
+  nlohmann::json LogFaults(const ConductorInspection& inspection,
+                           const std::vector<LineTrack>& line_tracks, int64_t frame,
+                           double timestamp_s, const std::vector<JpegBytes>& crops);
 
   std::unique_ptr<FrameSource> source_;
   BaseStationOptions options_;
@@ -219,6 +236,7 @@ class BaseStation {
   DistanceTracker tracker_;
   LineTracker line_tracker_;
   ConductorModel conductor_;  // the last frame's, seeds the next fit
+  FaultLog fault_log_;
   double alarm_distance_m_ = 1.0;
   double fps_ = 0;
   std::optional<Clock::time_point> last_publish_;

@@ -8,10 +8,12 @@
 
 #include <filesystem>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "linesight/core/error.h"
+#include "linesight/sim/power_line_scene.h"
 #include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
@@ -77,6 +79,27 @@ TEST(ParseRoiRequest, NamesWhatIsWrong) {
   ExpectRejected(many + "]}", "at most 32 ROIs");
 }
 
+TEST(ParseFaultImageName, AcceptsAnIdAndNamesWhatIsExpected) {
+  EXPECT_EQ(ParseFaultImageName("1.jpg"), 1);
+  EXPECT_EQ(ParseFaultImageName("123456789.jpg"), 123456789);
+  for (const char* name : {"", ".jpg", "0.jpg", "01.jpg", "-1.jpg", "+1.jpg", "1.png", "1.jpg.jpg",
+                           "1", "x.jpg", "1 .jpg", "1234567890.jpg", "../status", "1.JPG"}) {
+    try {
+      ParseFaultImageName(name);
+      ADD_FAILURE() << name << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("expected <id>.jpg"), std::string::npos) << e.what();
+    }
+  }
+  // A long name is shown shortened.
+  try {
+    ParseFaultImageName(std::string(5000, '7'));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_LT(std::string(e.what()).size(), 200u) << e.what();
+  }
+}
+
 // Seeded mutation test of the API body parser (the libFuzzer target base_station_fuzz runs the same
 // decoder): every mutant must parse or throw InputError, never crash or throw anything else.
 TEST(ParseRoiRequest, MutantsParseOrThrowInputError) {
@@ -111,6 +134,10 @@ TEST(ParseRoiRequest, MutantsParseOrThrowInputError) {
     try {
       const double d = ParseAlarmRequest(body);
       EXPECT_TRUE(d >= 0.05 && d <= 100) << body;
+    } catch (const InputError&) {
+    }
+    try {
+      EXPECT_GE(ParseFaultImageName(body), 1) << body;
     } catch (const InputError&) {
     }
   }
@@ -420,6 +447,99 @@ TEST(BaseStation, ListsTheObstaclesOnTheLineOfTheMovingSequence) {
     for (const auto& o : truth.obstacles) on_an_obstacle |= (box & o.box).area() > 0;
     EXPECT_TRUE(on_an_obstacle) << "a track that is not an obstacle of the scene: " << t.dump();
   }
+}
+
+// The conductor inspected live: a still pair of the synthetic line with a bird-cage 1.0 m along it
+// (linesight inspect finds it at 0.99..1.04 m). Every frame finds it, the station keeps it as one
+// fault at its true arc and serves its crop as a JPEG; names that are not a kept fault answer 404
+// with the reason; with the inspection off the result says so.
+TEST(BaseStation, ListsTheBirdcageOnTheLineWithItsCrop) {
+  sim::PowerLineSceneOptions scene_options;
+  scene_options.sensor.supersampling = 1;
+  scene_options.obstacles.clear();
+  scene_options.defects = sim::ParseDefectSpecs("birdcage:1.0");
+  const sim::PowerLineScene scene = sim::RenderPowerLineScene(scene_options);
+  ASSERT_EQ(scene.defects.size(), 1u);
+  const sim::RenderedDefect& truth = scene.defects[0];
+  const std::string l = ::testing::TempDir() + "/bs_birdcage_l.png";
+  const std::string r = ::testing::TempDir() + "/bs_birdcage_r.png";
+  ASSERT_TRUE(cv::imwrite(l, scene.left) && cv::imwrite(r, scene.right));
+  BaseStationOptions options;
+  options.max_frames = 3;
+  options.overlap = false;
+  BaseStation station(OpenFrameSource("pair:" + l + "," + r), scene.calibration, options);
+  LoopbackServer server(&station);
+  httplib::Client& client = server.client;
+  auto none_yet = client.Get("/api/fault/1.jpg");
+  ASSERT_TRUE(none_yet);
+  EXPECT_EQ(none_yet->status, 404);
+  EXPECT_NE(none_yet->body.find("no fault 1 is kept"), std::string::npos) << none_yet->body;
+
+  station.Start();
+  while (station.running()) station.WaitForFrame(station.Snapshot().frame_index, 1.0);
+  EXPECT_EQ(station.error(), "");
+  auto result = client.Get("/api/result");
+  ASSERT_TRUE(result);
+  ASSERT_EQ(result->status, 200);
+  const auto j = nlohmann::json::parse(result->body);
+  ASSERT_TRUE(j["line"].contains("inspection")) << result->body;
+  const auto& inspection = j["line"]["inspection"];
+  EXPECT_EQ(inspection["status"], "ok") << inspection.dump();
+  EXPECT_GT(inspection["inspected_m"].get<double>(), 0.5);
+  ASSERT_EQ(inspection["in_frame"].size(), 1u) << inspection.dump();
+  ASSERT_EQ(inspection["faults"].size(), 1u) << inspection.dump();
+  const auto& fault = inspection["faults"][0];
+  EXPECT_EQ(fault["type"], "birdcage");
+  EXPECT_EQ(inspection["in_frame"][0]["id"], fault["id"]);
+  EXPECT_NEAR(fault["arc_m"].get<double>(), truth.arc_m, 0.1) << fault.dump();
+  EXPECT_NEAR(fault["arc_now_m"].get<double>(), fault["arc_m"].get<double>(), 1e-9);  // still
+  EXPECT_GT(fault["length_m"].get<double>(), 0.0);
+  EXPECT_LT(fault["length_m"].get<double>(), 0.3);
+  EXPECT_GT(fault["size_m"].get<double>(), 0.0);
+  EXPECT_EQ(fault["sightings"], 3);
+  EXPECT_EQ(fault["last_seen_frame"], 2);
+  const cv::Rect box(fault["box"][0], fault["box"][1], fault["box"][2], fault["box"][3]);
+  EXPECT_GT((box & truth.box).area(), 0) << fault.dump();
+  EXPECT_GT(station.Status()["stages_ms"]["inspect"].get<double>(), 0.0);
+
+  const std::string url = fault["crop"];
+  EXPECT_EQ(url, fmt::format("/api/fault/{}.jpg", fault["id"].get<int>()));
+  auto crop = client.Get(url);
+  ASSERT_TRUE(crop);
+  ASSERT_EQ(crop->status, 200) << crop->body;
+  EXPECT_EQ(crop->get_header_value("Content-Type"), "image/jpeg");
+  const cv::Mat decoded =
+      cv::imdecode(std::vector<uint8_t>(crop->body.begin(), crop->body.end()), cv::IMREAD_COLOR);
+  EXPECT_GE(decoded.cols, box.width);
+  EXPECT_LE(std::max(decoded.cols, decoded.rows), options.fault_log.crop_max_px);
+
+  for (const auto& [path, fragment] : std::vector<std::pair<std::string, std::string>>{
+           {"/api/fault/99.jpg", "no fault 99 is kept"},
+           {"/api/fault/abc.jpg", "expected <id>.jpg"},
+           {"/api/fault/0.jpg", "expected <id>.jpg"},
+           {"/api/fault/", "expected <id>.jpg"},
+           {"/api/fault/1.jpg/x", "no such resource"}}) {
+    auto bad = client.Get(path);
+    ASSERT_TRUE(bad) << path;
+    EXPECT_EQ(bad->status, 404) << path;
+    EXPECT_NE(nlohmann::json::parse(bad->body)["error"].get<std::string>().find(fragment),
+              std::string::npos)
+        << path << " -> " << bad->body;
+  }
+  auto post = client.Post(url, "{}", "application/json");
+  ASSERT_TRUE(post);
+  EXPECT_EQ(post->status, 405);
+  EXPECT_EQ(post->get_header_value("Allow"), "GET");
+
+  // Switched off: the result says so and lists nothing.
+  options.inspect = false;
+  options.max_frames = 1;
+  BaseStation off(OpenFrameSource("pair:" + l + "," + r), scene.calibration, options);
+  EXPECT_TRUE(off.Step());
+  const nlohmann::json off_result = off.Snapshot().result;
+  EXPECT_EQ(off_result["line"]["inspection"]["status"], "off");
+  EXPECT_TRUE(off_result["line"]["inspection"]["faults"].empty());
+  EXPECT_EQ(off.Status()["inspect"], false);
 }
 
 }  // namespace

@@ -69,7 +69,7 @@ ChainBenchRow RunRow(const cv::Mat& left, const cv::Mat& right,
   BaseStation station(RepeatedPairSource(left, right, calibration, "chain"), std::nullopt,
                       station_options);
   for (int i = 0; i < options.warmup; ++i) station.Step();
-  std::vector<double> frame_ms, grab, rectify, match, range, health, encode, latency;
+  std::vector<double> frame_ms, grab, rectify, match, range, inspect, health, encode, latency;
   const long faults_before = MinorPageFaults();
   for (int i = 0; i < options.frames; ++i) {
     Stopwatch watch;
@@ -80,6 +80,7 @@ ChainBenchRow RunRow(const cv::Mat& left, const cv::Mat& right,
     rectify.push_back(s.rectify);
     match.push_back(s.match);
     range.push_back(s.range);
+    inspect.push_back(s.inspect);
     health.push_back(s.health);
     encode.push_back(s.encode);
     latency.push_back(s.latency);
@@ -91,8 +92,14 @@ ChainBenchRow RunRow(const cv::Mat& left, const cv::Mat& right,
   const nlohmann::json status = station.Status();
   row.searched_disparities = status["searched_disparities"][1].get<int>() -
                              status["searched_disparities"][0].get<int>() + 1;
-  row.median = {Median(grab),   Median(rectify), Median(match),  Median(range),
-                Median(health), Median(encode),  Median(latency)};
+  row.median.grab = Median(grab);
+  row.median.rectify = Median(rectify);
+  row.median.match = Median(match);
+  row.median.range = Median(range);
+  row.median.inspect = Median(inspect);
+  row.median.health = Median(health);
+  row.median.encode = Median(encode);
+  row.median.latency = Median(latency);
   row.frame_ms = Median(frame_ms);
   row.fps = row.frame_ms > 0 ? 1000.0 / row.frame_ms : 0;
   row.match_mde_per_s =
@@ -146,21 +153,24 @@ std::string ChainBenchMarkdown(const ChainBenchReport& r) {
       "Live chain (what `serve` does per frame) on {} ({}x{}), finder {}; {} ({} hardware "
       "threads); "
       "{} warm-up frames discarded; medians per stage (ms); peak RSS {:.0f} MiB\n\n"
-      "| method | disparities | grab | rectify | match | range | health | encode | frame ms | fps "
+      "| method | disparities | grab | rectify | match | range | inspect | health | encode | frame "
+      "ms "
+      "| fps "
       "| "
       "match MDE/s | page faults/frame | vs sgbm chain | overlapped: frame ms | fps | latency ms "
       "| vs sgbm |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
       r.input, r.image_size.width, r.image_size.height, r.finder, r.cpu, r.hardware_threads,
       r.warmup, r.peak_rss_mb);
   for (const ChainBenchRow& row : r.rows) {
     text += fmt::format(
         "| {} | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | "
+        "{:.1f} | "
         "{:.0f} | "
         "{:.0f} | {} | {:.1f} | {:.1f} | {:.0f} | {} |\n",
         row.method, row.searched_disparities, row.median.grab, row.median.rectify, row.median.match,
-        row.median.range, row.median.health, row.median.encode, row.frame_ms, row.fps,
-        row.match_mde_per_s, row.page_faults_per_frame,
+        row.median.range, row.median.inspect, row.median.health, row.median.encode, row.frame_ms,
+        row.fps, row.match_mde_per_s, row.page_faults_per_frame,
         row.ratio_to_sgbm > 0 ? fmt::format("{:.2f}x", row.ratio_to_sgbm) : "-",
         row.overlapped_frame_ms, row.overlapped_fps, row.overlapped_latency_ms,
         row.overlapped_ratio_to_sgbm > 0 ? fmt::format("{:.2f}x", row.overlapped_ratio_to_sgbm)

@@ -1,11 +1,11 @@
 // The live chain's throughput (`linesight bench --chain`): what `linesight serve` does per frame —
-// grab, rectify, match, find and range, the calibration-health measure on its frames, encode the
-// page's images — stepped on one pair held in memory, per method in the same run, with each
-// stage's median time, frames per second, the matcher's MDE/s, minor page faults per frame (first
-// touches of fresh memory: large buffers allocated per frame show here) and the process's peak
-// memory; then the same through the station's loop with grabbing-and-matching overlapped with
-// ranging (frame interval, rate, latency). Ratios are against the row of OpenCV's StereoSGBM
-// ("sgbm") run through the same chain.
+// grab, rectify, match, find and range, inspect the conductor (line finder), the calibration-health
+// measure on its frames, encode the page's images — stepped on one pair held in memory, per method
+// in the same run, with each stage's median time, frames per second, the matcher's MDE/s, minor
+// page faults per frame (first touches of fresh memory: large buffers allocated per frame show
+// here) and the process's peak memory; then the same through the station's loop with
+// grabbing-and-matching overlapped with ranging (frame interval, rate, latency). Ratios are against
+// the row of OpenCV's StereoSGBM ("sgbm") run through the same chain.
 #pragma once
 
 #include <functional>

@@ -5,7 +5,8 @@
 //
 // Checks: the page loads without console errors; results arrive pushed (server-sent events) and
 // the page shows every frame the pipeline publishes (its frame rate is the pipeline's); the badge
-// says LIVE, the stage timings and the calibration's health are shown; the images and the table
+// says LIVE, the stage timings and the calibration's health are shown; the faults on the line are
+// listed (or the list says there is none) with the conductor's inspection; the images and the table
 // update; the record switch writes the raw pairs and a result line per frame; pause holds the
 // frame and resume moves on; the automatic-finding switch turns finding off and on; a box
 // dragged on the nearest obstacle ranges it within 2 % of its true straight distance; when the
@@ -102,7 +103,12 @@ try {
   check(true, "the line table lists an obstacle");
   check((await page.textContent("#badge")) === "LIVE", "the badge says LIVE");
   const timing = await page.textContent("#timing");
-  check(/match \d+ · range \d+ · encode \d+ ms · latency \d+ ms/.test(timing), `stage timings shown ("${timing}")`);
+  check(/match \d+ · range \d+ · inspect \d+ · encode \d+ ms · latency \d+ ms/.test(timing), `stage timings shown ("${timing}")`);
+  const faultList = await page.evaluate(() => ({ rows: document.querySelectorAll("#faults tr").length,
+    text: document.getElementById("faults").textContent, inspection: document.getElementById("inspection").textContent }));
+  check(faultList.rows > 0 && (faultList.text.includes("no fault seen on the line") || /#\d+/.test(faultList.text)) &&
+    /^conductor (inspected|not inspected)/.test(faultList.inspection),
+    `the faults on the line are listed ("${faultList.text.slice(0, 60)}"; "${faultList.inspection}")`);
   const health = await page.textContent("#health");
   check(/^health: good · row offset median 0\.\d\d px/.test(health), `the calibration's health is shown ("${health}")`);
 
