@@ -4,8 +4,8 @@
 //   node server_reliability_test.mjs --linesight BIN [--clients 20] [--seconds 30] [--json FILE]
 //
 // 1. Bad requests answer 4xx with a JSON error and the server keeps serving: malformed JSON, wrong
-//    types, an ROI outside the image, an oversize body (413), unknown paths and path traversal
-//    (404), a wrong method (405 with Allow), a POST that is not JSON (415), a 100 kB URL (414), and
+//    types, an ROI outside the image, an oversize body (413), unknown paths, fault crops that are
+//    not kept and path traversal (404), a wrong method (405 with Allow), a POST that is not JSON (415), a 100 kB URL (414), and
 //    a request sent in half and left open.
 // 2. Load: `--clients` concurrent clients for `--seconds`, a quarter on the event stream, a quarter
 //    on the MJPEG stream, the rest on the API and the images: no failed request, every stream
@@ -133,6 +133,10 @@ try {
   await expectStatus(b, "/api/nothing", {}, 404, "unknown path");
   await expectStatus(b, "/../../etc/passwd", {}, 404, "path traversal");
   await expectStatus(b, "/%2e%2e/%2e%2e/etc/passwd", {}, 404, "encoded path traversal");
+  await expectStatus(b, "/api/fault/abc.jpg", {}, 404, "a fault crop name that is not <id>.jpg");
+  await expectStatus(b, "/api/fault/99999.jpg", {}, 404, "a fault that is not kept");
+  await expectStatus(b, "/api/fault/..%2f..%2fetc%2fpasswd", {}, 404, "encoded path traversal under the fault crops");
+  await expectStatus(b, "/api/fault/1.jpg", json("{}"), 405, "POST on a fault crop");
   await expectStatus(b, "/api/status", { method: "POST", headers: { "Content-Type": "application/json" }, body: "{}" }, 405, "POST on a GET route");
   await expectStatus(b, "/api/pause", {}, 405, "GET on a POST route");
   await expectStatus(b, "/api/rois", { method: "DELETE" }, 405, "DELETE");
