@@ -36,7 +36,7 @@ const cv::Mat& LineDisparity(const RangingPipeline& pipeline, const RangingFrame
 
 // The map with its speckles invalid (cv::filterSpeckles on the 1/16 px fixed-point map).
 cv::Mat Despeckle(const cv::Mat& disparity, const LineObstacleOptions& o) {
-  if (o.speckle_window_px == 0) return disparity;
+  if (o.speckle_window_px == 0) return disparity.clone();
   constexpr std::int16_t kInvalid = std::numeric_limits<std::int16_t>::min();
   cv::Mat fixed(disparity.size(), CV_16SC1);
   for (int y = 0; y < disparity.rows; ++y) {
@@ -257,6 +257,121 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
   return true;
 }
 
+// How far the model's disparity may be from a pixel's for that pixel to be taken as the band's
+// own (the cubic d(tau) is least sure beyond the observed ends of the line, where a far obstacle
+// hides the conductor behind it).
+constexpr double kBandModelTolerance = 0.25;
+// Pixels on one surface across the band: log disparities within 1.5 depth bands of the body test
+// (ThinStructureOptions::depth_band_relative, 0.04), which takes a surface to span 3 bands.
+constexpr double kSurfaceLogTolerance = 0.06;
+
+// The conductor's image band where it is wider than the conductor (CV_8U, 255 on the band's
+// pixels there): far obstacles on the line that are too small to be bodies. Only where the
+// conductor's image radius is below the matcher's fattening (beyond ~2.5 m for a 28 mm conductor
+// and a 4 px fattening): nearer, an obstacle wider than the conductor is a body. At every pixel
+// of the line's image arc, the band is the run of pixels across the line (gaps up to 2 px) on the
+// surface of the pixel nearest the axis whose disparity agrees with the model's; its width is the
+// conductor's image diameter 2 r (d + doffs) / B plus the fattening on both sides, measured as the
+// median excess over all such sections of the line. A section is widened when its excess over
+// that exceeds min_widening_px and min_widening_relative of the conductor's band width; a run of
+// at least min_widening_length_px widened sections (one-section gaps bridged) marks its pixels.
+// A 52 mm clamp 4.5 m ahead is 8 px wide, hardly a 45 mm body, but widens the band by 4-10 px.
+cv::Mat WideningOfTheLine(const cv::Mat& disparity, const ConductorModel& model,
+                          const StereoGeometry& g, const LineObstacleOptions& o) {
+  cv::Mat out = cv::Mat::zeros(disparity.size(), CV_8UC1);
+  if (o.min_widening_px <= 0) return out;
+  const ConductorCurve& line = model.line;
+  const double r = line.radius_m > 0 ? line.radius_m : o.conductor.max_radius_m;
+  const cv::Rect image(0, 0, disparity.cols, disparity.rows);
+  const auto pixel_at = [&](const cv::Point2d& c, double across, double along) {
+    return cv::Point(int(std::lround(c.x + across * line.normal.x + along * line.axis.x)),
+                     int(std::lround(c.y + across * line.normal.y + along * line.axis.y)));
+  };
+  const auto on_surface = [&](const cv::Point& p, double d_ref) {
+    if (!image.contains(p)) return false;
+    const float d = disparity.at<float>(p);
+    return IsValidDisparity(d) && d + g.disparity_offset_px > 0 &&
+           std::fabs(std::log((d + g.disparity_offset_px) / (d_ref + g.disparity_offset_px))) <=
+               kSurfaceLogTolerance;
+  };
+  struct Section {
+    double tau, conductor_px, d_ref;
+    int lo, hi;  // the band across the line (px along the normal from the axis)
+  };
+  std::vector<Section> sections;
+  for (double tau = std::floor(line.tau_min - kHiddenLinePx); tau <= line.tau_max + kHiddenLinePx;
+       tau += 1.0) {
+    const double d_line = line.DisparityAt(tau);
+    if (d_line + g.disparity_offset_px <= 0 ||
+        g.DepthFromDisparity(d_line) > o.conductor.max_depth_m) {
+      continue;
+    }
+    const double conductor_px = r * (d_line + g.disparity_offset_px) / g.baseline_m;
+    if (conductor_px >= o.conductor.fattening_px) continue;
+    const cv::Point2d c = line.ImagePoint(tau);
+    const int half = int(std::ceil(conductor_px + o.conductor.fattening_px));
+    Section sec{tau, conductor_px, -1, 0, 0};
+    for (int k = 0; k <= half && sec.d_ref < 0; ++k) {
+      for (int across : {k, -k}) {
+        const cv::Point p = pixel_at(c, across, 0);
+        if (!image.contains(p)) continue;
+        const float d = disparity.at<float>(p);
+        if (IsValidDisparity(d) && std::fabs(d - d_line) <= kBandModelTolerance * d_line) {
+          sec = {tau, conductor_px, d, across, across};
+          break;
+        }
+      }
+    }
+    if (sec.d_ref < 0) continue;
+    // Out to the corridor's depth below or above the line.
+    const int reach = int(std::max(o.corridor_above_m, o.corridor_below_m) *
+                          (d_line + g.disparity_offset_px) / g.baseline_m);
+    for (int sign : {-1, 1}) {
+      int last = sec.lo;
+      for (int across = sec.lo + sign; std::abs(across) <= reach && std::abs(across - last) <= 2;
+           across += sign) {
+        if (on_surface(pixel_at(c, across, 0), sec.d_ref)) last = across;
+      }
+      (sign < 0 ? sec.lo : sec.hi) = last;
+    }
+    sections.push_back(sec);
+  }
+  if (sections.size() < 8) return out;
+  std::vector<double> excess;
+  for (const Section& sec : sections) excess.push_back(sec.hi - sec.lo + 1 - 2 * sec.conductor_px);
+  const double fattening = Quantile(excess, 0.5);
+  const size_t n = sections.size();
+  std::vector<bool> wide(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double band = 2 * sections[i].conductor_px + fattening;
+    wide[i] = excess[i] - fattening >= std::max(o.min_widening_px, o.min_widening_relative * band);
+  }
+  for (size_t i = 0; i < n;) {
+    if (!wide[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i;  // the run's last widened section
+    for (size_t k = i + 1; k < n && sections[k].tau - sections[j].tau <= 2.0; ++k) {
+      if (wide[k]) j = k;
+    }
+    if (sections[j].tau - sections[i].tau + 1 >= o.min_widening_length_px) {
+      for (size_t k = i; k <= j; ++k) {
+        const Section& sec = sections[k];
+        const cv::Point2d c = line.ImagePoint(sec.tau);
+        for (double across = sec.lo; across <= sec.hi; across += 0.5) {
+          for (double along : {-0.5, 0.0, 0.5}) {
+            const cv::Point p = pixel_at(c, across, along);
+            if (on_surface(p, sec.d_ref)) out.at<std::uint8_t>(p) = 255;
+          }
+        }
+      }
+    }
+    i = j + 1;
+  }
+  return out;
+}
+
 // Straight and along-the-line distance from the ranging chain on the obstacle's pixels only.
 void Range(const RangingPipeline& pipeline, const RangingFrame& frame, const cv::Mat& disparity,
            const ConductorModel& model, cv::Mat* masked, LineObstacle* o) {
@@ -346,6 +461,12 @@ void LineObstacleOptions::Check() const {
               min_attached_pixels, "must be >= 1");
   CheckOption(join_gap_m >= 0 && join_gap_m <= 1, "LineObstacleOptions.join_gap_m", join_gap_m,
               "must be in [0, 1] m");
+  CheckOption(min_widening_px >= 0, "LineObstacleOptions.min_widening_px", min_widening_px,
+              "must be >= 0 px");
+  CheckOption(min_widening_relative >= 0, "LineObstacleOptions.min_widening_relative",
+              min_widening_relative, "must be >= 0");
+  CheckOption(min_widening_length_px >= 1, "LineObstacleOptions.min_widening_length_px",
+              min_widening_length_px, "must be >= 1 px");
   CheckOption(insulator_min_above_m > 0, "LineObstacleOptions.insulator_min_above_m",
               insulator_min_above_m, "must be > 0");
   CheckOption(insulator_min_side_m > 0, "LineObstacleOptions.insulator_min_side_m",
@@ -398,9 +519,15 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   conductor.searched_max_disparity_px = pipeline.search_range().max_disparity();
   result.conductor = FitConductor(disparity, g, conductor, bodies, previous);
   if (!result.conductor.ok()) return result;
-  const cv::Mat despeckled = Despeckle(disparity, options);
-  std::vector<LinePoint> points =
-      CorridorPoints(despeckled, bodies, g, result.conductor, options, &result.body_pixels);
+  cv::Mat despeckled = Despeckle(disparity, options);
+  // Far obstacles on the line are bodies too. The speckle filter is meant for stray matches, which
+  // are as small in pixels as a far obstacle is: pixels the line vouches for (on its band, at its
+  // depth) are kept.
+  const cv::Mat widening = WideningOfTheLine(disparity, result.conductor, g, options);
+  disparity.copyTo(despeckled, widening);
+  const cv::Mat obstacle_bodies = bodies | widening;
+  std::vector<LinePoint> points = CorridorPoints(despeckled, obstacle_bodies, g, result.conductor,
+                                                 options, &result.body_pixels);
   result.corridor_pixels = static_cast<int>(points.size());
   cv::Mat masked(disparity.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   for (const std::vector<LinePoint>& run :

@@ -1,17 +1,19 @@
 // Obstacles on the robot's conductor: what is attached to or hangs from the line ahead, its type,
 // and how far along the line and in a straight line it is.
 //
-// Method. The bodies of the disparity map (BodyMask: surfaces wider than a conductor) are
-// back-projected and placed relative to the conductor model (ConductorModel::Locate): arc length
-// along the line, height above or below it, offset to the side. Those inside a corridor around
-// the line are split into obstacles where the arc has a gap; an obstacle must touch the conductor
-// (some of its points within the radius plus a few centimetres of the axis), so a tower or a
-// branch beside the line is not one of its obstacles however near it is. The straight distance is
-// the ranging chain's nearest surface of the obstacle's own pixels (RangeObstacle on a map that
-// holds only them, refined on the images and with its model uncertainty); the distance along the
-// line is the arc of that nearest surface: its pixels back-projected at that distance and located
-// on the line (the near end of the obstacle). The type follows from the obstacle's extent around
-// the line, with the matcher's edge fattening (a few pixels, so Z * px / f metres) removed:
+// Method. The bodies of the disparity map (BodyMask: surfaces wider than a conductor), and far
+// away where an obstacle is too few pixels to be a body, the stretches where the conductor's band
+// is wider than the conductor, are back-projected and placed relative to the conductor model
+// (ConductorModel::Locate): arc length along the line, height above or below it, offset to the
+// side. Those inside a corridor around the line are split into obstacles where the arc has a gap;
+// an obstacle must touch the conductor (some of its points within the radius plus a few centimetres
+// of the axis), so a tower or a branch beside the line is not one of its obstacles however near it
+// is. The straight distance is the ranging chain's nearest surface of the obstacle's own pixels
+// (RangeObstacle on a map that holds only them, refined on the images and with its model
+// uncertainty); the distance along the line is the arc of that nearest surface: its pixels
+// back-projected at that distance and located on the line (the near end of the obstacle). The type
+// follows from the obstacle's extent around the line, with the matcher's edge fattening (a few
+// pixels, so Z * px / f metres) removed:
 //   insulator string - reaches far above the line (a vertical string of discs) or wide to the sides
 //   damper           - hangs below the line (the weights on their messenger cable)
 //   clamp            - compact around the line
@@ -74,6 +76,14 @@ struct LineObstacleOptions {
   // gap to a damper weight (~0.1 m); a tower's leg beside the line stays out. 0 = only touching
   // pieces.
   double join_gap_m = 0.15;
+  // Far obstacles that are not bodies: where the conductor's image radius is below the matcher's
+  // fattening, the conductor's band at its depth widened by at least min_widening_px and by
+  // min_widening_relative of the band's width, over at least min_widening_length_px of the line's
+  // image arc (min_widening_px 0 = off). A 52 mm clamp 4.5 m ahead widens the band by 4-10 px over
+  // 3-4 px of the image arc: the line recedes almost along the line of sight.
+  double min_widening_px = 3.0;
+  double min_widening_relative = 0.5;
+  double min_widening_length_px = 4.0;
   // Type thresholds (m, after removing the fattening): see the file comment.
   double insulator_min_above_m = 0.25;
   double insulator_min_side_m = 0.08;

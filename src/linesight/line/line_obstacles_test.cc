@@ -134,6 +134,50 @@ TEST(LineObstaclesTest, AnInsulatorStringIsJoinedToItsClampAndTypedAsAString) {
   EXPECT_GE(2 * found_count, scored) << found_count << " of " << scored << " frames";
 }
 
+// A clamp 4-5 m ahead along the line is 8-10 px wide, hardly a 45 mm body: it is found where it
+// widens the conductor's band at the line's depth (WideningOfTheLine). On the exact disparities of
+// tuning seed 3, with the body test blind to anything narrower than 0.2 m: the first clamp is found
+// at 4.1-4.9 m along the line with the widening, and not without it. Without the matcher's
+// fattening, which also spreads a clamp along the line, it widens only 3 px of the image arc.
+TEST(LineObstaclesTest, AFarClampIsFoundWhereItWidensTheConductorsBand) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(3));
+  double clamp_arc = -1;  // its centre from the robot's start
+  for (const sim::SequenceLayoutEntry& e : sequence.layout()) {
+    if (e.type == sim::ObstacleType::kSuspensionClamp && clamp_arc < 0) clamp_arc = e.arc_m;
+  }
+  ASSERT_GT(clamp_arc, 0) << "tuning seed 3 has a clamp";
+  LineObstacleOptions widening;
+  widening.conductor.max_conductor_width_m = 0.2;
+  widening.min_widening_length_px = 3;
+  LineObstacleOptions without = widening;
+  without.min_widening_px = 0;
+  int scored = 0;
+  for (int index = 0; index < sequence.size(); index += 8) {
+    const double ahead = clamp_arc - sequence.TravelledAt(index);
+    if (ahead > 5.3) continue;  // not worth rendering: out of the checked range
+    if (ahead < 4.2) break;
+    const sim::PowerLineScene scene = sequence.Render(index);
+    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
+    RangingFrame frame = pipeline.Process(scene.left, scene.right);
+    frame.disparity = scene.disparity;
+    frame.checked_disparity = scene.disparity;
+    for (const sim::RenderedObstacle& truth : scene.obstacles) {
+      if (truth.type != sim::ObstacleType::kSuspensionClamp || truth.near_arc_m < 4.1 ||
+          truth.near_arc_m > 4.9 || truth.visible_pixels == 0) {
+        continue;
+      }
+      ++scored;
+      const int k = MatchTruth(FindLineObstacles(pipeline, frame, widening), truth);
+      EXPECT_GE(k, 0) << "frame " << index << ": the clamp at " << truth.near_arc_m
+                      << " m along the line is not found";
+      EXPECT_LT(MatchTruth(FindLineObstacles(pipeline, frame, without), truth), 0)
+          << "frame " << index << ": the clamp at " << truth.near_arc_m
+          << " m is found without the widening: the test does not isolate it";
+    }
+  }
+  EXPECT_GE(scored, 2);
+}
+
 TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   sim::PowerLineSceneOptions scene_options;
   scene_options.sensor.supersampling = 1;
