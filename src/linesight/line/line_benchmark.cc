@@ -1,7 +1,8 @@
 // Cost of the line stages on one 752x480 frame of the moving synthetic sequence (seed 3, frame
 // 160: a clamp 1.2 m ahead, a damper and an insulator string farther on, a tower beside the line),
 // on isgm's disparities of that frame: the conductor model alone, and the conductor model with
-// the obstacles on it (their ranging and surface refinement included).
+// the obstacles on it (their ranging and surface refinement included), with and without the
+// widened-band search for far obstacles.
 #include <optional>
 
 #include <benchmark/benchmark.h>
@@ -36,17 +37,20 @@ void BM_FitConductor(benchmark::State& state) {
 }
 BENCHMARK(BM_FitConductor)->Unit(benchmark::kMillisecond);
 
+// Argument 1: as configured; 0: without the widened-band search for far obstacles (its cost).
 void BM_FindLineObstacles(benchmark::State& state) {
   const Frame& f = TheFrame();
+  LineObstacleOptions options;
+  if (state.range(0) == 0) options.min_widening_px = 0;
   std::size_t found = 0;
   for (auto _ : state) {
-    const LineObstacles result = FindLineObstacles(*f.pipeline, f.frame, {});
+    const LineObstacles result = FindLineObstacles(*f.pipeline, f.frame, options);
     found = result.obstacles.size();
     benchmark::DoNotOptimize(found);
   }
   state.counters["obstacles"] = static_cast<double>(found);
 }
-BENCHMARK(BM_FindLineObstacles)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FindLineObstacles)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace linesight
