@@ -11,6 +11,7 @@
 #include "linesight/core/machine.h"
 #include "linesight/core/progress.h"
 #include "linesight/eval/plot.h"
+#include "linesight/eval/study_sequences.h"
 #include "linesight/geometry/depth.h"
 
 namespace linesight {
@@ -32,17 +33,6 @@ int BinOf(const std::vector<double>& edges, double value) {
 // The size a truth is binned by: birdcage relative to the conductor's radius, the rest in metres.
 double SizeOf(const sim::RenderedDefect& truth, double radius_m) {
   return truth.type == sim::DefectType::kBirdcage ? truth.size_m / radius_m : truth.size_m;
-}
-
-sim::PowerLineSequence SequenceOf(const FaultStudyOptions& options, std::uint64_t seed) {
-  sim::PowerLineSequenceOptions o = options.sequence;
-  o.seed = seed;
-  return sim::PowerLineSequence(o);
-}
-
-// The frames of `sequence` the study scores (before the frame step).
-int FramesOf(const FaultStudyOptions& options, const sim::PowerLineSequence& sequence) {
-  return options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
 }
 
 std::string Percent(const FaultRates& r) {
@@ -83,7 +73,7 @@ nlohmann::json FaultRates::ToJson() const {
 int FaultStudyFrames(const FaultStudyOptions& options) {
   int total = 0;
   for (std::uint64_t seed : options.seeds) {
-    const int n = FramesOf(options, SequenceOf(options, seed));
+    const int n = StudyFrames(options, StudySequence(options, seed));
     total += (n + options.frame_step - 1) / options.frame_step;
   }
   return total;
@@ -120,8 +110,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
   std::vector<double> radius_errors;
 
   for (std::uint64_t seed : options.seeds) {
-    const sim::PowerLineSequence sequence = SequenceOf(options, seed);
-    const int n = FramesOf(options, sequence);
+    const sim::PowerLineSequence sequence = StudySequence(options, seed);
+    const int n = StudyFrames(options, sequence);
     ConductorModel previous;
     for (int index = 0; index < n; index += options.frame_step) {
       const sim::PowerLineScene scene = sequence.Render(index);

@@ -13,6 +13,7 @@
 #include "linesight/core/timer.h"
 #include "linesight/eval/plot.h"
 #include "linesight/eval/report.h"
+#include "linesight/eval/study_sequences.h"
 #include "linesight/ranging/ranging_settings.h"
 
 namespace linesight {
@@ -45,26 +46,10 @@ void SequenceStudyOptions::Check() const {
   tracker.Check();
 }
 
-namespace {
-
-// The sequence of `seed` with the study's sequence options.
-sim::PowerLineSequence SequenceOf(const SequenceStudyOptions& options, std::uint64_t seed) {
-  sim::PowerLineSequenceOptions o = options.sequence;
-  o.seed = seed;
-  return sim::PowerLineSequence(o);
-}
-
-// The frames of `sequence` the study scores (before the frame step).
-int FramesOf(const SequenceStudyOptions& options, const sim::PowerLineSequence& sequence) {
-  return options.max_frames > 0 ? std::min(options.max_frames, sequence.size()) : sequence.size();
-}
-
-}  // namespace
-
 int SequenceStudyFrames(const SequenceStudyOptions& options) {
   int total = 0;
   for (std::uint64_t seed : options.seeds) {
-    const int n = FramesOf(options, SequenceOf(options, seed));
+    const int n = StudyFrames(options, StudySequence(options, seed));
     total += (n + options.frame_step - 1) / options.frame_step;
   }
   return total;
@@ -209,8 +194,8 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
   const double tol = options.match_tolerance;
 
   for (std::uint64_t seed : options.seeds) {
-    const sim::PowerLineSequence sequence = SequenceOf(options, seed);
-    const int n = FramesOf(options, sequence);
+    const sim::PowerLineSequence sequence = StudySequence(options, seed);
+    const int n = StudyFrames(options, sequence);
     LineTracker tracker(options.tracker);
     ConductorModel previous;
     // Per truth id of this sequence.
