@@ -67,23 +67,25 @@ bool SupportsCurve(const ConductorCurve& k, const Candidate& c, const Tolerance&
          std::fabs(r.d) <= widen * tol.Disparity(c.d);
 }
 
-// Weighted least squares of the cubic y = c0 + c1 t + c2 t^2 + c3 t^3 (t scaled by `scale` for
-// conditioning).
-void FitCubic(const std::vector<double>& t, const std::vector<double>& y,
-              const std::vector<double>& w, double scale, double out[4]) {
-  cv::Matx44d a = cv::Matx44d::zeros();
-  cv::Vec4d b(0, 0, 0, 0);
+// Weighted least squares of the polynomial y = c0 + c1 t + ... + c_degree t^degree (degree <= 3;
+// t scaled by `scale` for conditioning); the coefficients above the degree are 0.
+void FitPolynomial(const std::vector<double>& t, const std::vector<double>& y,
+                   const std::vector<double>& w, double scale, int degree, double out[4]) {
+  const int n = degree + 1;
+  cv::Mat a = cv::Mat::zeros(n, n, CV_64F), b = cv::Mat::zeros(n, 1, CV_64F);
   for (size_t i = 0; i < t.size(); ++i) {
     const double s = t[i] / scale;
-    const cv::Vec4d phi(1.0, s, s * s, s * s * s);
-    a += w[i] * phi * phi.t();
-    b += w[i] * y[i] * phi;
+    double phi[4] = {1.0, s, s * s, s * s * s};
+    for (int r = 0; r < n; ++r) {
+      b.at<double>(r) += w[i] * y[i] * phi[r];
+      for (int c = 0; c < n; ++c) a.at<double>(r, c) += w[i] * phi[r] * phi[c];
+    }
   }
-  cv::Vec4d c;
+  cv::Mat c;
   if (!cv::solve(a, b, c, cv::DECOMP_CHOLESKY)) {
     cv::solve(a, b, c, cv::DECOMP_SVD);
   }
-  for (int k = 0; k < 4; ++k) out[k] = c[k] / std::pow(scale, k);
+  for (int k = 0; k < 4; ++k) out[k] = k < n ? c.at<double>(k) / std::pow(scale, k) : 0.0;
 }
 
 // Fits the curve to the candidates in `members` (indices) and returns it with tau range, residuals.
@@ -137,8 +139,8 @@ ConductorCurve FitCurve(const std::vector<Candidate>& all, const std::vector<int
     w_nu[j] *= share;
     w_d[j] *= share;
   }
-  FitCubic(tau, nu, w_nu, scale, k.nu);
-  FitCubic(tau, d, w_d, scale, k.d);
+  FitPolynomial(tau, nu, w_nu, scale, tol.o.curve_degree, k.nu);
+  FitPolynomial(tau, d, w_d, scale, tol.o.curve_degree, k.d);
   k.tau_min = *std::min_element(tau.begin(), tau.end());
   k.tau_max = *std::max_element(tau.begin(), tau.end());
   double e_nu = 0, e_d = 0;
@@ -417,6 +419,8 @@ void ConductorOptions::Check() const {
               "must be > 0");
   CheckOption(min_coverage >= 0 && min_coverage <= 1, "ConductorOptions.min_coverage", min_coverage,
               "must be in [0, 1]");
+  CheckOption(curve_degree >= 1 && curve_degree <= 3, "ConductorOptions.curve_degree", curve_degree,
+              "must be 1, 2 or 3");
   CheckOption(max_conductors >= 1 && max_conductors <= 8, "ConductorOptions.max_conductors",
               max_conductors, "must be in [1, 8]");
 }

@@ -8,13 +8,13 @@
 // pairs of candidates finds the line with the most support, where a pixel supports a line when
 // its image distance to the line's image is at most the conductor's half-width at its disparity
 // (r d / B for radius r, plus the matcher's edge fattening) and its disparity agrees within the
-// matching noise. The inliers are then fitted by weighted least squares with a quadratic in the
-// image arc coordinate tau, for the lateral offset nu(tau) and the disparity d(tau), re-selecting
-// inliers three times. The 3D curve is that (u, v, d) curve back-projected, sampled as a
-// polyline, extended straight from its nearest observed part to the point of the line nearest to
-// the camera centre (the robot's reference on the line: arc length 0). Further conductors are
-// found in the same way among the remaining candidates; the robot's conductor is the one that
-// passes nearest to the camera.
+// matching noise. The inliers are then fitted by weighted least squares with a polynomial
+// (ConductorOptions::curve_degree; a straight line by default) in the image arc coordinate tau,
+// for the lateral offset nu(tau) and the disparity d(tau), re-selecting inliers three times. The 3D
+// curve is that (u, v, d) curve back-projected, sampled as a polyline, extended straight from its
+// nearest observed part to the point of the line nearest to the camera centre (the robot's
+// reference on the line: arc length 0). Further conductors are found in the same way among the
+// remaining candidates; the robot's conductor is the one that passes nearest to the camera.
 //
 // With a previous frame's model the previous curve is tried first as a hypothesis, so the line is
 // tracked over frames and cannot jump to another conductor unless that one explains the pixels
@@ -58,6 +58,11 @@ struct ConductorOptions {
   // is seen continuously except where an obstacle hides it; a chance alignment of matching noise
   // on the ground or in the sky is not.
   double min_coverage = 0.5;
+  // Degree of the polynomials nu(tau), d(tau) of the refit. 1: a straight 3D line, which is
+  // straight in (u, v, d); the sag a span puts into the <= 12 m ahead of the robot is a few cm, and
+  // a higher degree lets an obstacle at either end of the seen line (a clamp 0.5 m ahead, a far
+  // fitting the line runs into) bend the curve through it. 2 or 3 for a strongly bent line.
+  int curve_degree = 1;
   std::uint64_t seed = 1;  // RANSAC sampling (deterministic)
   // The matcher's largest searched disparity (px; 0 = unknown): a pixel at it is censored (the
   // surface is nearer than the search reaches), not a measurement, and is left out.
@@ -80,8 +85,8 @@ std::string ConductorStatusName(ConductorStatus status);
 struct ConductorCurve {
   // Image frame of the fit: tau along `axis` from `centre`, nu along `normal`.
   cv::Point2d centre, axis, normal;
-  // Cubics: nu(tau) = nu0 + nu1 tau + nu2 tau^2 + nu3 tau^3 (px), d(tau) likewise (px). A straight
-  // 3D line is straight in (u, v, d); the sag of a span and the lens's residual bend need the rest.
+  // Polynomials: nu(tau) = nu0 + nu1 tau + nu2 tau^2 + nu3 tau^3 (px), d(tau) likewise (px), the
+  // terms above ConductorOptions::curve_degree 0. A straight 3D line is straight in (u, v, d).
   double nu[4] = {0, 0, 0, 0};
   double d[4] = {0, 0, 0, 0};
   double tau_min = 0, tau_max = 0;  // observed extent (px)

@@ -86,6 +86,24 @@ TEST(ConductorTest, FollowsTheTrueAxisOnMatchedDisparities) {
   }
 }
 
+// The line runs into an insulator string's clamp 4.2 m ahead (seed 7, frame 120) and its near end
+// is a 40 px wide band at the image's top: the matched map's pixels of both are inliers. The
+// straight line in (u, v, d) stays on the axis (1.8 cm); a cubic there bends through them (9 cm
+// off at the clamp).
+TEST(ConductorTest, AnObstacleAtTheFarEndDoesNotBendTheLine) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(7));
+  const sim::PowerLineScene scene = sequence.Render(120);
+  RangingPipelineOptions options;
+  options.threads = 1;
+  const RangingPipeline pipeline(scene.calibration, options);
+  const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+  const ConductorModel model = FitConductor(frame.disparity, pipeline.geometry(), {});
+  ASSERT_TRUE(model.ok()) << model.reason;
+  const AxisError e = CompareAxis(model, scene, 0.5, 4.2);
+  EXPECT_LT(e.max_offset_m, 0.03);
+  EXPECT_LT(e.arc_error_m, 0.01);
+}
+
 // A synthetic rectified disparity map: f = 700 px, B = 0.1 m, principal point at the centre.
 StereoGeometry SyntheticGeometry() { return {700.0, 0.1, 0.0, 376.0, 240.0}; }
 
@@ -159,6 +177,11 @@ TEST(ConductorTest, RejectsBadOptionsAndMaps) {
   o.max_depth_m = 0.1;
   EXPECT_THROW(FitConductor(EmptyDisparity(), SyntheticGeometry(), o), OptionError);
   EXPECT_THROW(FitConductor(cv::Mat(10, 10, CV_8UC1), SyntheticGeometry(), {}), InputError);
+  for (int degree : {0, 4}) {
+    ConductorOptions bad;
+    bad.curve_degree = degree;
+    EXPECT_THROW(FitConductor(EmptyDisparity(), SyntheticGeometry(), bad), OptionError);
+  }
 }
 
 // The naive reference of CurveLocator: every segment's frame worked out for every point.
