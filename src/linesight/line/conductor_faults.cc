@@ -80,6 +80,11 @@ struct CrossSection {
   double edge_px[2] = {0, 0};  // distance of each edge from the line's point (px)
   double contrast = 0;
   double protrusion_px[2] = {0, 0};
+  // The band's extent: how far from the line's point the profile, coming in from the background,
+  // first leaves it (px, per side as edge_px); extent_found when both sides have one inside the
+  // background ring.
+  bool extent_found = false;
+  double extent_px[2] = {0, 0};
 };
 
 CrossSection MeasureCrossSection(const cv::Mat& image, cv::Point2d p, cv::Point2d n,
@@ -127,6 +132,42 @@ CrossSection MeasureCrossSection(const cv::Mat& image, cv::Point2d p, cv::Point2
   const double e0 = HalfCrossing(profile, centre, +1, band, background[0]);
   const double e1 = HalfCrossing(profile, centre, -1, band, background[1]);
   if (e0 < 0 || e1 < 0) return out;
+  // The extent on each side: coming in from the ring, the first sample that differs from the
+  // background (towards the band's level) by extent_fraction of the contrast. Lit spread strands
+  // are lighter than the conductor's shaded core, yet well off the background; what lies inside
+  // the extent (the strands' texture, the gaps between them) does not matter. The rings are placed
+  // about the band's centre (between the half-way crossings), not the model's point: the model's
+  // image of the line may be off by a few pixels, and a swelling is round the conductor's axis.
+  out.extent_found = true;
+  const double sign = band > mean_background ? 1.0 : -1.0;
+  const int mid = static_cast<int>(std::lround(0.5 * (e0 + e1)));
+  const double mid_offset_px = (mid - half) * kStep;
+  for (int side = 0; side < 2 && out.extent_found; ++side) {
+    const int direction = side == 0 ? +1 : -1;
+    auto at = [&](int k) { return profile[mid + direction * k]; };
+    auto inside = [&](int k) { return mid + direction * k >= 0 && mid + direction * k < count; };
+    std::vector<double> ring;
+    for (int k = ring_from; k <= ring_to && inside(k); ++k) ring.push_back(at(k));
+    if (ring.size() < 4) {
+      out.extent_found = false;
+      break;
+    }
+    const double level = Median(ring);
+    const double threshold = o.extent_fraction * std::fabs(band - level);
+    auto excess = [&](int k) { return sign * (at(k) - level) - threshold; };
+    int k = ring_from - 1;
+    if (excess(k) > 0) {  // the ring itself is not background next to the band
+      out.extent_found = false;
+      break;
+    }
+    while (k - 1 >= 0 && excess(k - 1) <= 0) --k;
+    if (k - 1 < 0) {  // never leaves the background: no band on this side
+      out.extent_found = false;
+      break;
+    }
+    const double a = excess(k - 1), b = excess(k);  // a > 0 >= b
+    out.extent_px[side] = (k - 1 + a / (a - b)) * kStep + direction * mid_offset_px;
+  }
   const double edges[2] = {e0, e1};
   out.edge_px[0] = (e0 - half) * kStep;
   out.edge_px[1] = (half - e1) * kStep;
@@ -156,17 +197,67 @@ CrossSection MeasureCrossSection(const cv::Mat& image, cv::Point2d p, cv::Point2
   return out;
 }
 
+// The clean conductor's extent against depth: extent_px = slope * f / Z + offset_px, fitted to
+// the measured samples by least squares trimmed at 2.5 robust sigmas (a few rounds), and the
+// robust spread of all the measured samples about it.
+struct ExtentFit {
+  double slope = 0, offset_px = 0, sigma_px = 0;
+  double At(double f_over_z) const { return slope * f_over_z + offset_px; }
+};
+
+ExtentFit FitExtent(const std::vector<RadiusSample>& profile, double focal_px) {
+  std::vector<double> x, y;
+  for (const RadiusSample& s : profile) {
+    if (!s.measured) continue;
+    x.push_back(focal_px / s.depth_m);
+    y.push_back(s.extent_px);
+  }
+  ExtentFit fit;
+  if (x.empty()) return fit;
+  std::vector<double> ratios(x.size());
+  for (size_t i = 0; i < x.size(); ++i) ratios[i] = y[i] / x[i];
+  fit.slope = Median(ratios);
+  std::vector<double> residuals(x.size());
+  auto spread = [&] {
+    for (size_t i = 0; i < x.size(); ++i) residuals[i] = y[i] - fit.At(x[i]);
+    const double centre = Median(residuals);
+    std::vector<double> deviations(x.size());
+    for (size_t i = 0; i < x.size(); ++i) deviations[i] = std::fabs(residuals[i] - centre);
+    return 1.4826 * Median(deviations);
+  };
+  for (int round = 0; round < 5; ++round) {
+    const double sigma = std::max(0.05, spread());
+    double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      if (std::fabs(residuals[i]) > 2.5 * sigma) continue;
+      sw += 1;
+      sx += x[i];
+      sy += y[i];
+      sxx += x[i] * x[i];
+      sxy += x[i] * y[i];
+    }
+    const double det = sw * sxx - sx * sx;
+    if (sw < 3 || det <= 1e-9 * sw * sxx) break;  // one depth only: keep the slope alone
+    fit.slope = (sw * sxy - sx * sy) / det;
+    fit.offset_px = (sy - fit.slope * sx) / sw;
+  }
+  fit.sigma_px = spread();
+  return fit;
+}
+
 struct Stretch {
   int first = 0, last = 0;  // sample indices
 };
 
-// Runs of flagged samples, joined across gaps of at most `gap_m` of arc.
+// Runs of flagged samples: neighbouring samples (one pixel of the line's image apart, several cm
+// of arc beyond ~2 m), joined across gaps of at most `gap_m` of arc.
 std::vector<Stretch> Runs(const std::vector<RadiusSample>& profile,
                           const std::vector<char>& flagged, double gap_m) {
   std::vector<Stretch> runs;
   for (int i = 0; i < static_cast<int>(profile.size()); ++i) {
     if (!flagged[i]) continue;
-    if (!runs.empty() && profile[i].arc_m - profile[runs.back().last].arc_m <= gap_m) {
+    if (!runs.empty() && (i == runs.back().last + 1 ||
+                          profile[i].arc_m - profile[runs.back().last].arc_m <= gap_m)) {
       runs.back().last = i;
     } else {
       runs.push_back({i, i});
@@ -221,6 +312,18 @@ void ConductorFaultOptions::Check() const {
               "ConductorFaultOptions.fitting_margin_m", fitting_margin_m, "must be in [0, 1) m");
   CheckOption(fattening_px >= 0 && fattening_px <= 20, "ConductorFaultOptions.fattening_px",
               fattening_px, "must be in [0, 20] px");
+  CheckOption(extent_fraction > 0 && extent_fraction < 1, "ConductorFaultOptions.extent_fraction",
+              extent_fraction, "must be in (0, 1)");
+  CheckOption(outlier_sigmas > 0, "ConductorFaultOptions.outlier_sigmas", outlier_sigmas,
+              "must be > 0");
+  CheckOption(baseline_gap_m >= 0, "ConductorFaultOptions.baseline_gap_m", baseline_gap_m,
+              "must be >= 0 m");
+  CheckOption(baseline_reach_m > baseline_gap_m, "ConductorFaultOptions.baseline_reach_m",
+              baseline_reach_m, "must exceed baseline_gap_m");
+  CheckOption(min_baseline_samples >= 1, "ConductorFaultOptions.min_baseline_samples",
+              min_baseline_samples, "must be >= 1");
+  CheckOption(min_swelling_samples >= 1, "ConductorFaultOptions.min_swelling_samples",
+              min_swelling_samples, "must be >= 1");
   CheckOption(depth_tolerance > 0 && depth_tolerance < 1, "ConductorFaultOptions.depth_tolerance",
               depth_tolerance, "must be in (0, 1)");
 }
@@ -252,7 +355,10 @@ nlohmann::json ConductorInspection::ToJson(bool with_profile) const {
                    {"pixel", {s.pixel.x, s.pixel.y}},
                    {"depth_m", s.depth_m},
                    {"measured", s.measured},
+                   {"radius_measured", s.radius_measured},
                    {"radius_m", s.radius_m},
+                   {"extent_m", s.extent_m},
+                   {"baseline_m", s.baseline_m},
                    {"contrast", s.contrast},
                    {"protrusion_px", {s.protrusion_px[0], s.protrusion_px[1]}}});
     }
@@ -321,14 +427,14 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     const CrossSection r = MeasureCrossSection(right, p - cv::Point2d(d, 0), nr, expected_px,
                                                window, strand_px, o, &profile);
     s.contrast = std::min(l.contrast, r.contrast);
-    // The band between the expected edges and the measured ones must be at the line's depth
+    // The band between the expected edges and the measured extent must be at the line's depth
     // where the matcher measured it: where the line crosses the horizon or passes in front of
-    // another surface, the half-way crossing can lie on that surface's edge instead.
+    // another surface, the extent can lie on that surface's edge instead.
     const double tolerance = std::max(1.0, o.depth_tolerance * d);
     bool band_at_line = true;
-    for (int side = 0; side < 2 && l.measured && band_at_line; ++side) {
+    for (int side = 0; side < 2 && l.extent_found && band_at_line; ++side) {
       const double sign = side == 0 ? 1.0 : -1.0;
-      for (double off = expected_px + o.fattening_px; off < l.edge_px[side] - 1.0; off += 1.0) {
+      for (double off = expected_px + o.fattening_px; off < l.extent_px[side] - 1.0; off += 1.0) {
         const float v = DisparityNear(disparity, p.x + sign * off * n.x, p.y + sign * off * n.y);
         if (std::isfinite(v) && std::fabs(v - d) > tolerance) {
           band_at_line = false;
@@ -336,17 +442,26 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
         }
       }
     }
-    // Both views must also agree on the width: an edge pulled by the background (the horizon or a
-    // structure just behind the line) is pulled differently in the other view.
-    if (l.measured && r.measured && band_at_line &&
-        std::fabs(l.radius_px - r.radius_px) <= std::max(1.0, 0.15 * expected_px)) {
+    // Both views must agree on the extent: an edge pulled by the background (the horizon, a
+    // structure behind the line, the ground's texture) lies elsewhere in the other view, while the
+    // conductor's outline, swollen or not, is at the line's depth in both.
+    const double agreement = std::max(1.0, 0.15 * expected_px);
+    auto width = [](const double* e) { return e[0] + e[1]; };
+    if (l.extent_found && r.extent_found && band_at_line &&
+        std::fabs(width(l.extent_px) - width(r.extent_px)) <= 2 * agreement) {
       s.measured = true;
-      s.radius_px = 0.5 * (l.radius_px + r.radius_px);
-      s.radius_m = s.radius_px * z / g.focal_px;
-      for (int side = 0; side < 2; ++side) {
-        const double a = l.protrusion_px[side], b = r.protrusion_px[side];
-        if (a > 0 && b > 0 && std::fabs(a - b) <= std::max(1.5, 0.25 * std::max(a, b))) {
-          s.protrusion_px[side] = std::min(a, b);
+      s.extent_px = 0.25 * (width(l.extent_px) + width(r.extent_px));
+      s.extent_m = s.extent_px * z / g.focal_px;
+      // The half-way crossings give the conductor's radius where both views agree on them.
+      if (l.measured && r.measured && std::fabs(l.radius_px - r.radius_px) <= agreement) {
+        s.radius_measured = true;
+        s.radius_px = 0.5 * (l.radius_px + r.radius_px);
+        s.radius_m = s.radius_px * z / g.focal_px;
+        for (int side = 0; side < 2; ++side) {
+          const double a = l.protrusion_px[side], b = r.protrusion_px[side];
+          if (a > 0 && b > 0 && std::fabs(a - b) <= std::max(1.5, 0.25 * std::max(a, b))) {
+            s.protrusion_px[side] = std::min(a, b);
+          }
         }
       }
     }
@@ -360,30 +475,62 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
       const double margin = o.fitting_margin_m + o.margin_m;
       if (s.arc_m >= ob.arc_m - margin && s.arc_m <= ob.arc_m + ob.length_m + margin) {
         s.measured = false;
+        s.radius_measured = false;
       }
     }
   }
 
-  // The conductor's radius and the edges' noise over the measured samples.
-  std::vector<double> radii, residuals;
+  // The conductor's radius from the half-way crossings; the extents' noise against the clean
+  // conductor's own extent nearby.
+  int measured_count = 0;
+  std::vector<double> radii;
   for (const RadiusSample& s : out.profile) {
-    if (s.measured) radii.push_back(s.radius_m);
+    measured_count += s.measured ? 1 : 0;
+    if (s.radius_measured) radii.push_back(s.radius_m);
   }
-  if (radii.size() < 20) {
+  if (measured_count < 20 || radii.empty()) {
     out.status = InspectionStatus::kNotInspected;
     out.reason = fmt::format(
         "only {} samples of the line could be measured (too little contrast "
         "against the background)",
-        radii.size());
+        measured_count);
     return out;
   }
   out.radius_m = Median(radii);
-  for (const RadiusSample& s : out.profile) {
-    if (s.measured) residuals.push_back(s.radius_px - out.radius_m * g.focal_px / s.depth_m);
+  // The clean conductor's extent. Over the whole line, its image half-width is its radius times
+  // f / Z plus an offset in pixels that does not scale with depth (the blur, the lit side's
+  // lighter strands): a robust fit of extent_px = a f / Z + b; its residuals' robust spread is the
+  // noise. Samples off the fit by more than outlier_sigmas are not a reference (a rope measured
+  // instead of the line, the line half hidden, a swelling). At each sample, the reference is the
+  // median over the inlier samples between baseline_gap_m and baseline_reach_m of arc on either
+  // side (the background and the lighting change along the line; a swelling up to twice the gap
+  // long is not its own reference), or the fit where there are too few.
+  const int n = static_cast<int>(out.profile.size());
+  const ExtentFit fit = FitExtent(out.profile, g.focal_px);
+  out.noise_px = std::max(0.05, fit.sigma_px);
+  std::vector<char> inlier(n, 0);
+  for (int i = 0; i < n; ++i) {
+    const RadiusSample& s = out.profile[i];
+    inlier[i] = s.measured && std::fabs(s.extent_px - fit.At(g.focal_px / s.depth_m)) <=
+                                  o.outlier_sigmas * out.noise_px;
   }
-  const double centre_residual = Median(residuals);
-  for (double& r : residuals) r = std::fabs(r - centre_residual);
-  out.noise_px = std::max(0.05, 1.4826 * Median(residuals));
+  std::vector<double> near;
+  for (int i = 0; i < n; ++i) {
+    RadiusSample& s = out.profile[i];
+    near.clear();
+    for (int j = 0; j < n; ++j) {
+      const RadiusSample& t = out.profile[j];
+      const double gap = std::fabs(t.arc_m - s.arc_m);
+      if (inlier[j] && gap >= o.baseline_gap_m && gap <= o.baseline_reach_m) {
+        // Its radius term, carried to this sample's depth.
+        near.push_back((t.extent_px - fit.offset_px) * t.depth_m);
+      }
+    }
+    const double scale = g.focal_px / s.depth_m;
+    const bool enough = static_cast<int>(near.size()) >= o.min_baseline_samples;
+    const double reference_px = enough ? Median(near) / s.depth_m + fit.offset_px : fit.At(scale);
+    s.baseline_m = reference_px / scale;
+  }
   for (size_t i = 0; i < out.profile.size(); ++i) {
     const RadiusSample& s = out.profile[i];
     if (!s.measured) continue;
@@ -409,7 +556,6 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     }
     return false;
   };
-  const int n = static_cast<int>(out.profile.size());
   auto make_fault = [&](ConductorFaultType type, const Stretch& r) {
     ConductorFault f;
     f.type = type;
@@ -438,23 +584,42 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     return f;
   };
 
-  // Swelling on both sides (the radius from both edges).
+  // Swelling: the extent beyond the clean conductor's by the noise, and its radius term (the
+  // extent less the offset) by a share.
   std::vector<char> swollen(n, 0);
+  std::vector<double> increase_m(n, 0.0);
   for (int i = 0; i < n; ++i) {
     const RadiusSample& s = out.profile[i];
     if (!s.measured) continue;
-    const double expected_px = out.radius_m * g.focal_px / s.depth_m;
-    swollen[i] = s.radius_m > out.radius_m * (1 + o.min_swelling) &&
-                 s.radius_px - expected_px > o.swelling_sigmas * out.noise_px;
+    const double scale = g.focal_px / s.depth_m;
+    const double reference_px = s.baseline_m * scale;
+    const double radius_px = reference_px - fit.offset_px;
+    if (radius_px <= 0) continue;
+    const double excess_px = s.extent_px - reference_px;
+    increase_m[i] = excess_px / scale;
+    swollen[i] =
+        excess_px > o.min_swelling * radius_px && excess_px > o.swelling_sigmas * out.noise_px;
   }
+  // Arc covered by a stretch: its samples' arcs plus half the step to the neighbour beyond each end
+  // (beyond ~2 m the line runs nearly along the view and one pixel of its image spans several
+  // centimetres of arc).
+  auto half_step = [&](int i, int neighbour) {
+    if (neighbour < 0 || neighbour >= n) neighbour = 2 * i - neighbour;
+    if (neighbour < 0 || neighbour >= n) return 0.0;
+    return 0.5 * std::fabs(out.profile[i].arc_m - out.profile[neighbour].arc_m);
+  };
   for (const Stretch& r : Runs(out.profile, swollen, o.merge_gap_m)) {
     ConductorFault f = make_fault(ConductorFaultType::kBirdcage, r);
-    if (f.arc_end_m - f.arc_begin_m < o.min_swelling_length_m) continue;
+    int count = 0;
+    for (int i = r.first; i <= r.last; ++i) count += swollen[i];
+    const double covered = f.arc_end_m - f.arc_begin_m + half_step(r.first, r.first - 1) +
+                           half_step(r.last, r.last + 1);
+    if (covered < o.min_swelling_length_m || count < o.min_swelling_samples) continue;
     if (on_fitting(f)) continue;
     double largest = 0;
     for (int i = r.first; i <= r.last; ++i) {
-      if (out.profile[i].measured) {
-        largest = std::max(largest, out.profile[i].radius_m - out.radius_m);
+      if (swollen[i]) {
+        largest = std::max(largest, increase_m[i]);
       }
     }
     f.size_m = largest;

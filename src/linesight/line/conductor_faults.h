@@ -4,31 +4,36 @@
 // Method. The conductor model (conductor.h) gives the line's image curve and its disparity d(tau)
 // along it. At every pixel of the curve the rectified left image is sampled across the line (0.25
 // px steps, bilinear) over the conductor's expected width plus a margin, and so is the right image
-// at the same point of the line (d(tau) px to the left). The conductor shows as a band of one level
-// against the background on each side; its edges are where the profile crosses half-way between
-// the band's level and that side's background level (sub-pixel), which holds for any blur that is
-// symmetric across the edge. The band's width in pixels times B / d(tau) is the conductor's
-// diameter there: a radius profile along the line in metres, from the image's edges rather than
-// from the disparity (whose edges the matcher fattens by several pixels). A sample counts only
-// where the band between the expected and the measured edges lies at the line's depth where the
-// matcher measured it and the two views agree on the width: where the line crosses the horizon or
-// passes just in front of another surface, the crossing lies on that surface's edge instead.
-// Beyond each edge, a thin bump that still differs from the background by half the band's
-// contrast in both views is a protrusion (a strand end standing off); protrusions are part of the
-// profile's JSON for study.
+// at the same point of the line (d(tau) px to the left). The conductor shows as a band against the
+// background on each side. Two widths are measured in each view:
+//  - its edges, where the profile crosses half-way between the band's darkest level and that
+//    side's background (sub-pixel; right for any blur symmetric across the edge): the conductor's
+//    radius, the median over the line;
+//  - its extent, where the profile, coming in from the background next to the band (a ring about
+//    the band's centre), first leaves it by extent_fraction of the contrast. A lit bird-cage's
+//    spread strands are lighter than the shaded core, so its half-way edges fall inside the bulge,
+//    but its outline is well off the background.
+// A sample counts only where both views agree on the extent (an edge pulled by the background, the
+// horizon or the ground's texture, lies elsewhere in the other view, while the conductor's outline
+// is at the line's depth in both) and the band out to the extent lies at the line's depth where
+// the matcher measured it. Beyond each edge, a thin bump that still differs from the background by
+// half the band's contrast in both views is a protrusion (a strand end standing off); protrusions
+// are part of the profile's JSON for study.
 //
-// The profile is compared with the conductor's own radius (the median over the profile), in units
-// of the measured noise (the spread of the edges in pixels, which the radius in metres scales with
-// depth): a bird-cage is where the radius exceeds the conductor's by a margin over >= 3 cm of arc.
+// The extent is compared with the clean conductor's own: a robust fit of the extent in pixels
+// against f / Z (the radius, plus an offset of the blur and the lighting that does not scale with
+// depth) rejects samples that are no reference, and the reference at each sample is the median of
+// the inlier samples 0.15-0.6 m of arc away, carried to its depth. A bird-cage is where the extent
+// exceeds the reference by a share of the radius and by the noise (the fit's robust spread) over
+// >= 3 cm of arc and two samples (beyond ~2 m one pixel of the line's image spans several cm).
 // Stretches that overlap a fitting the obstacle finder typed (damper, clamp, insulator) belong to
 // that fitting. Samples without contrast on both sides (the line in front of a tower, the terrain
 // or a bright cloud edge) are not measured, and a stretch without enough measured samples gives no
 // verdict: the report says how much of the line was inspected.
 //
 // Broken strands and foreign objects (string, sheet, nest) are not reported yet (on the tuning
-// sequences the protrusions found 1 of 31 broken strands), and the swelling of a lit bird-cage
-// beyond ~1 m is mostly missed: its outer strands are lighter than the band's darkest level, so the
-// half-way crossings stay near the conductor's own radius (docs/algorithms/faults.md).
+// sequences the protrusions found 1 of 31 broken strands); a bird-cage where the line crosses the
+// horizon or passes in front of ground of its own grey is missed (docs/algorithms/faults.md).
 #pragma once
 
 #include <string>
@@ -55,16 +60,34 @@ struct ConductorFaultOptions {
   double max_window_px = 48.0;
   // The band must differ from the background by this much on both sides (grey levels, 8-bit).
   double min_contrast = 12.0;
-  // Swelling: the radius exceeds the conductor's by this share and by swelling_sigmas times the
-  // noise, over at least min_swelling_length_m of arc.
+  // Swelling: the extent exceeds the clean conductor's by min_swelling of its radius and by
+  // swelling_sigmas times the noise, over at least min_swelling_length_m of arc and at least
+  // min_swelling_samples samples (one per pixel of the line's image: beyond ~2 m one pixel spans
+  // several cm of arc, and one sample alone is noise).
   double min_swelling = 0.10;
   double swelling_sigmas = 4.0;
   double min_swelling_length_m = 0.03;
+  int min_swelling_samples = 2;
+  // The band's extent on each side is where the profile, coming in from the background, first
+  // differs from it by this share of the band's contrast: lit spread strands are lighter than the
+  // shaded core but still well off the background (0.5 would be the half-way edge; at 0.3 the
+  // background's own texture starts to count).
+  double extent_fraction = 0.4;
+  // Samples farther than outlier_sigmas times the noise from the fit of the extent against depth
+  // are no reference for the clean conductor (a rope measured instead of the line, a swelling).
+  double outlier_sigmas = 3.0;
+  // The clean conductor's extent at a sample is the median of the reference samples between
+  // baseline_gap_m and baseline_reach_m of arc away (m), carried to its depth: the background and
+  // the lighting change along the line, and a swelling up to twice the gap long is not its own
+  // reference. Fewer than min_baseline_samples there: the fit over the whole line.
+  double baseline_gap_m = 0.15;
+  double baseline_reach_m = 0.6;
+  int min_baseline_samples = 6;
   // Stretches farther apart than this along the line are separate faults (m).
   double merge_gap_m = 0.03;
   // A stretch within this arc of a typed fitting belongs to the fitting (m).
   double fitting_margin_m = 0.05;
-  // The band between the expected and the measured edges must lie at the line's disparity where
+  // The band between the expected edges and the extent must lie at the line's disparity where
   // the matcher measured it (within depth_tolerance, at least 1 px), beyond its edge fattening.
   double fattening_px = 4.0;
   double depth_tolerance = 0.05;
@@ -74,12 +97,18 @@ struct ConductorFaultOptions {
 
 // One sample of the profile (one pixel step along the line's image).
 struct RadiusSample {
-  double tau = 0;         // image arc coordinate of the curve (px)
-  cv::Point2d pixel;      // the curve's point there (rectified left)
-  double arc_m = 0;       // arc length along the line from the robot (m)
-  double depth_m = 0;     // depth of the line there (m)
-  bool measured = false;  // contrast on both sides: the edges below are meaningful
-  double radius_m = 0;    // half the band's width (m)
+  double tau = 0;      // image arc coordinate of the curve (px)
+  cv::Point2d pixel;   // the curve's point there (rectified left)
+  double arc_m = 0;    // arc length along the line from the robot (m)
+  double depth_m = 0;  // depth of the line there (m)
+  // Both views see the band's extent alike, at the line's depth: the extent is meaningful.
+  bool measured = false;
+  double extent_m = 0;  // half the band's extent (m): from background to background
+  double extent_px = 0;
+  double baseline_m = 0;  // the clean conductor's extent nearby (m)
+  // Both views also agree on the half-way crossings: the radius is meaningful.
+  bool radius_measured = false;
+  double radius_m = 0;  // half the band's width between the half-way crossings (m)
   double radius_px = 0;
   double contrast = 0;  // the smaller of the two sides' |band - background| (grey levels)
   // Protrusion beyond each edge in the image (px; 0 = none). Side 0 is the image side towards +v
@@ -92,7 +121,7 @@ struct ConductorFault {
   double arc_m = 0;                       // centre of the stretch along the line (m)
   double arc_begin_m = 0, arc_end_m = 0;  // its extent (m)
   double distance_m = 0;                  // depth of the line there (m)
-  // The radius increase (m).
+  // The largest increase of the extent over the clean conductor's (m).
   double size_m = 0;
   double confidence = 0;  // 0..1: the evidence above its threshold and the share measured
   cv::Rect box;           // rectified left image
@@ -109,9 +138,9 @@ std::string InspectionStatusName(InspectionStatus status);
 struct ConductorInspection {
   InspectionStatus status = InspectionStatus::kNoConductor;
   std::string reason;
-  double radius_m = 0;        // the conductor's radius (median of the measured samples, m)
-  double noise_px = 0;        // spread of the measured edges (px, robust sigma)
-  double inspected_m = 0;     // arc length covered by measured samples (m)
+  double radius_m = 0;     // the conductor's radius (median of the measured samples, m)
+  double noise_px = 0;     // spread of the extents about the clean conductor's (px, robust sigma)
+  double inspected_m = 0;  // arc length covered by measured samples (m)
   double inspected_to_m = 0;  // the farthest measured arc (m)
   std::vector<RadiusSample> profile;
   std::vector<ConductorFault> faults;  // nearest first

@@ -75,6 +75,52 @@ TEST(ConductorFaultsTest, ACleanLineHasItsRadiusAndNoFault) {
   EXPECT_GE(inspected, 4);
 }
 
+// A still scene with one lit bird-cage (or none) on the robot's line, which rises a little so that
+// the line stays in front of the sky out to 3 m (where the line crosses the horizon or passes in
+// front of ground of its own grey, its outline cannot be seen; docs/algorithms/faults.md).
+sim::PowerLineSceneOptions BirdcageScene(double arc_m, double swelling) {
+  sim::PowerLineSceneOptions o;
+  o.sensor.supersampling = 2;
+  o.obstacles.clear();
+  o.conductor_pitch_rad = 0.08;
+  if (swelling > 0) {
+    sim::DefectSpec d;
+    d.type = sim::DefectType::kBirdcage;
+    d.arc_m = arc_m;
+    d.swelling = swelling;
+    d.length_m = 0.15;
+    o.defects = {d};
+  }
+  return o;
+}
+
+// The same line without a fault: no bird-cage is reported anywhere along it.
+TEST(ConductorFaultsTest, ACleanRisingLineHasNoFault) {
+  const Inspected r = InspectScene(sim::RenderPowerLineScene(BirdcageScene(0, 0)));
+  ASSERT_EQ(r.inspection.status, InspectionStatus::kOk);
+  EXPECT_GT(r.inspection.inspected_m, 1.0);
+  EXPECT_TRUE(r.inspection.faults.empty());
+}
+
+// A lit bird-cage swelling the conductor's radius by 30 % is found on its stretch at 1.2 m and at
+// 2 m along the line, at its depth, with its radius increase within 50 %.
+TEST(ConductorFaultsTest, ALitBirdcageIsFoundWithItsSwelling) {
+  for (double arc : {1.2, 2.0}) {
+    SCOPED_TRACE(arc);
+    const Inspected r = InspectScene(sim::RenderPowerLineScene(BirdcageScene(arc, 0.3)));
+    ASSERT_EQ(r.inspection.status, InspectionStatus::kOk);
+    ASSERT_EQ(r.scene.defects.size(), 1u);
+    const sim::RenderedDefect& truth = r.scene.defects[0];
+    ASSERT_EQ(r.inspection.faults.size(), 1u);
+    const ConductorFault& f = r.inspection.faults[0];
+    EXPECT_EQ(f.type, ConductorFaultType::kBirdcage);
+    EXPECT_LE(f.arc_begin_m, truth.arc_end_m);
+    EXPECT_GE(f.arc_end_m, truth.arc_begin_m);
+    EXPECT_NEAR(f.size_m, truth.size_m, 0.5 * truth.size_m);
+    EXPECT_NEAR(f.distance_m, truth.distance_m, 0.15);
+  }
+}
+
 }  // namespace
 }  // namespace linesight
 
@@ -96,6 +142,33 @@ TEST(ConductorFaultsTest, NoConductorGivesAStatusAndNoFault) {
   EXPECT_EQ(r.reason, "the line is seen end-on");
   EXPECT_TRUE(r.faults.empty());
   EXPECT_EQ(r.ToJson()["status"], "no_conductor");
+}
+
+TEST(ConductorFaultsTest, DefaultOptionsAreValid) {
+  EXPECT_NO_THROW(ConductorFaultOptions().Check());
+}
+
+TEST(ConductorFaultsTest, BadExtentOptionsNameTheField) {
+  for (double fraction : {0.0, 1.0}) {
+    ConductorFaultOptions o;
+    o.extent_fraction = fraction;
+    EXPECT_THROW(o.Check(), OptionError) << fraction;
+  }
+  ConductorFaultOptions o;
+  o.baseline_reach_m = o.baseline_gap_m;
+  try {
+    o.Check();
+    ADD_FAILURE() << "a reference window of no width passed";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("ConductorFaultOptions.baseline_reach_m"),
+              std::string::npos);
+  }
+  o = {};
+  o.min_swelling_samples = 0;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = {};
+  o.outlier_sigmas = 0;
+  EXPECT_THROW(o.Check(), OptionError);
 }
 
 TEST(ConductorFaultsTest, BadOptionsNameTheField) {
