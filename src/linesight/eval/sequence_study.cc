@@ -68,6 +68,7 @@ nlohmann::json SequenceRateStats::ToJson() const {
           {"missed",
            {{"no_conductor", missed_no_conductor},
             {"off_distance", missed_off_distance},
+            {"covered", missed_covered},
             {"not_found", missed_not_found}}}};
 }
 
@@ -242,9 +243,11 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
         o.farthest_scored_m = std::max(o.farthest_scored_m, truth.near_arc_m);
         const int type = TypeIndex(acc.types, o.type);
         const int bin = acc.Bin(truth.near_arc_m);
-        const bool overlapped =
-            std::any_of(found.obstacles.begin(), found.obstacles.end(),
-                        [&](const LineObstacle& d) { return (d.box & truth.box).area() > 0; });
+        bool off_distance = false, covered = false;
+        for (size_t q = 0; q < found.obstacles.size(); ++q) {
+          if ((found.obstacles[q].box & truth.box).area() == 0) continue;
+          (match[q] < 0 ? off_distance : covered) = true;
+        }
         for (SequenceRateStats* s : {&acc.all, type >= 0 ? &acc.by_type[type] : nullptr,
                                      bin >= 0 ? &acc.by_bin[bin] : nullptr}) {
           if (s == nullptr) continue;
@@ -252,7 +255,8 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
           s->matched += k >= 0;
           if (k < 0) {
             ++(!found.conductor.ok() ? s->missed_no_conductor
-               : overlapped          ? s->missed_off_distance
+               : off_distance        ? s->missed_off_distance
+               : covered             ? s->missed_covered
                                      : s->missed_not_found);
           }
           s->typed_right += typed;
@@ -388,10 +392,11 @@ std::string SequenceStudyReport::ToMarkdown() const {
   out +=
       "\n| along the line (m) | scored | recall | precision | arc median % | arc p95 % | "
       "straight median % | straight p95 % | missed: no conductor | missed: off in distance | "
-      "missed: not found |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+      "missed: covered by another | missed: not found "
+      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   const auto misses = [](const SequenceRateStats& r) {
-    return fmt::format("{} | {} | {}", r.missed_no_conductor, r.missed_off_distance,
-                       r.missed_not_found);
+    return fmt::format("{} | {} | {} | {}", r.missed_no_conductor, r.missed_off_distance,
+                       r.missed_covered, r.missed_not_found);
   };
   for (const SequenceBin& b : bins) {
     out += fmt::format("| {:.1f}-{:.1f} | {} | {:.3f} | {:.3f} | {} | {} | {} | {} | {} |\n",

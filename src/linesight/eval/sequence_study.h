@@ -63,10 +63,11 @@ struct SequenceRateStats {
   int detections = 0, true_detections = 0;  // detections in range and matching a truth
   int typed_right = 0;                      // of the matched, with the truth's type
   std::map<std::string, int> typed_as;      // of the matched: count per detected type
-  // Why the unmatched scored truths were missed: no conductor model in that frame; a detection's
-  // box overlaps the truth's but its distance along the line is off by more than the tolerance
-  // (or it matched another truth); no detection overlaps it.
-  int missed_no_conductor = 0, missed_off_distance = 0, missed_not_found = 0;
+  // Why the unmatched scored truths were missed: no conductor model in that frame; a detection
+  // that matches no truth overlaps the truth's box, its distance along the line off by more than
+  // the tolerance; only detections of other obstacles overlap it (along a receding line a nearer
+  // obstacle's box often covers a farther one's); no detection overlaps it.
+  int missed_no_conductor = 0, missed_off_distance = 0, missed_covered = 0, missed_not_found = 0;
   double recall() const { return scored ? double(matched) / scored : 0.0; }
   double precision() const { return detections ? double(true_detections) / detections : 1.0; }
   double type_accuracy() const { return matched ? double(typed_right) / matched : 0.0; }

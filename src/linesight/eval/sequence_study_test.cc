@@ -72,7 +72,7 @@ TEST(SequenceStudyTest, ScoresASequenceEndToEnd) {
   EXPECT_EQ(matched, r.all.matched);
   // Every miss has one cause.
   for (const SequenceRateStats& s : r.by_type) {
-    EXPECT_EQ(s.missed_no_conductor + s.missed_off_distance + s.missed_not_found,
+    EXPECT_EQ(s.missed_no_conductor + s.missed_off_distance + s.missed_covered + s.missed_not_found,
               s.scored - s.matched);
   }
   EXPECT_EQ(r.all.missed_no_conductor, 0);
