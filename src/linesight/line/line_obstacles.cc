@@ -225,6 +225,9 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
   int attached = 0;
   const std::vector<LinePoint> run = AttachedPieces(all, model, g, o, &attached);
   if (static_cast<int>(run.size()) < o.min_pixels) return false;
+  double area = 0;
+  for (const LinePoint& p : run) area += (p.z / g.focal_px) * (p.z / g.focal_px);
+  if (area < o.min_area_m2) return false;
   std::vector<double> z, arc, down, up, side;
   int x0 = run[0].x, x1 = run[0].x, y0 = run[0].y, y1 = run[0].y;
   for (const LinePoint& p : run) {
@@ -258,7 +261,7 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
 }
 
 // How far the model's disparity may be from a pixel's for that pixel to be taken as the band's
-// own (the cubic d(tau) is least sure beyond the observed ends of the line, where a far obstacle
+// own (the model's d(tau) is least sure beyond the observed ends of the line, where a far obstacle
 // hides the conductor behind it).
 constexpr double kBandModelTolerance = 0.25;
 // Pixels on one surface across the band: log disparities within 1.5 depth bands of the body test
@@ -457,6 +460,8 @@ void LineObstacleOptions::Check() const {
   CheckOption(speckle_range_px >= 0 && speckle_range_px <= 100,
               "LineObstacleOptions.speckle_range_px", speckle_range_px, "must be in [0, 100] px");
   CheckOption(min_pixels >= 1, "LineObstacleOptions.min_pixels", min_pixels, "must be >= 1");
+  CheckOption(min_area_m2 >= 0 && min_area_m2 < 0.1, "LineObstacleOptions.min_area_m2", min_area_m2,
+              "must be in [0, 0.1) m^2");
   CheckOption(min_attached_pixels >= 1, "LineObstacleOptions.min_attached_pixels",
               min_attached_pixels, "must be >= 1");
   CheckOption(join_gap_m >= 0 && join_gap_m <= 1, "LineObstacleOptions.join_gap_m", join_gap_m,

@@ -65,7 +65,12 @@ struct LineObstacleOptions {
   // pull its nearest surface towards the camera. 0 = no filter.
   int speckle_window_px = 100;
   double speckle_range_px = 2.0;
-  int min_pixels = 25;          // fewer body pixels: not an obstacle (too small or too far)
+  int min_pixels = 25;  // fewer body pixels: not an obstacle (too small or too far)
+  // Smallest visible area of an obstacle at its own depth (m^2, the sum of its pixels' footprints
+  // (z / f)^2): the least a fitting shows is a damper weight's or a clamp's face seen end-on, a
+  // few 10 cm^2. A pixel count alone cannot tell a near fragment (the matcher's fill where the line
+  // meets a near clamp, 30-50 px at 1 m: ~1 cm^2) from a far clamp (50 px at 5 m: ~25 cm^2).
+  double min_area_m2 = 5e-4;
   int min_attached_pixels = 4;  // fewer touching pixels: not on this line
   // The parts of one obstacle are joined by members too thin to be bodies (an insulator string's
   // 18 mm link from its clamp to the first disc, a damper's 13 mm messenger from its clamp to its

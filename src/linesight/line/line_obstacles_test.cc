@@ -178,6 +178,42 @@ TEST(LineObstaclesTest, AFarClampIsFoundWhereItWidensTheConductorsBand) {
   EXPECT_GE(scored, 2);
 }
 
+// Tuning seed 3 as the robot nears its first clamp (1-1.5 m ahead): where the line meets the clamp
+// the matcher's fill forms a body 30-50 px across, 0.3 m nearer along the line than the clamp, a
+// few cm^2 at its depth. It is no obstacle (min_area_m2); the clamp itself is found.
+TEST(LineObstaclesTest, AFragmentWhereTheLineMeetsANearClampIsNoObstacle) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(3));
+  LineObstacleOptions no_area;
+  no_area.min_area_m2 = 0;
+  int fragments = 0;
+  for (int index : {152, 156, 162}) {
+    const sim::PowerLineScene scene = sequence.Render(index);
+    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
+    const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+    const LineObstacles found = FindLineObstacles(pipeline, frame, {});
+    const LineObstacles unfiltered = FindLineObstacles(pipeline, frame, no_area);
+    for (const sim::RenderedObstacle& truth : scene.obstacles) {
+      if (truth.type == sim::ObstacleType::kSuspensionClamp && truth.near_arc_m < 2) {
+        EXPECT_GE(MatchTruth(found, truth), 0) << "frame " << index << ": the clamp is missed";
+      }
+    }
+    const auto matches_a_truth = [&](const LineObstacles& all, size_t k) {
+      for (const sim::RenderedObstacle& truth : scene.obstacles) {
+        if (MatchTruth(all, truth) == static_cast<int>(k)) return true;
+      }
+      return false;
+    };
+    for (size_t k = 0; k < found.obstacles.size(); ++k) {
+      EXPECT_TRUE(matches_a_truth(found, k)) << "frame " << index << ": a false obstacle "
+                                             << found.obstacles[k].arc_m << " m along the line";
+    }
+    for (size_t k = 0; k < unfiltered.obstacles.size(); ++k) {
+      fragments += !matches_a_truth(unfiltered, k);
+    }
+  }
+  EXPECT_GE(fragments, 1) << "no fragment without the area test: the test does not isolate it";
+}
+
 TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   sim::PowerLineSceneOptions scene_options;
   scene_options.sensor.supersampling = 1;
@@ -193,6 +229,9 @@ TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   LineObstacleOptions bad;
   bad.corridor_side_m = 0;
   EXPECT_THROW(FindLineObstacles(pipeline, frame, bad), OptionError);
+  LineObstacleOptions bad_area;
+  bad_area.min_area_m2 = -1e-4;
+  EXPECT_THROW(FindLineObstacles(pipeline, frame, bad_area), OptionError);
 }
 
 }  // namespace
