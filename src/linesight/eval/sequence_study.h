@@ -40,7 +40,7 @@ struct SequenceStudyOptions {
   // Sequences to score (seeds of sim::PowerLineSequenceOptions) and the seeds the line stages'
   // thresholds were chosen on; the report warns when the two overlap.
   std::vector<std::uint64_t> seeds{201, 202, 203, 204, 205, 206, 207, 208, 209, 210};
-  std::vector<std::uint64_t> tuning_seeds{3, 5, 7};
+  std::vector<std::uint64_t> tuning_seeds{3, 4, 5, 6, 7, 8, 9};
   sim::PowerLineSequenceOptions sequence;  // seed set per sequence; supersampling 1 by default
   int frame_step = 1;                      // every n-th frame (the tracker sees n / fps steps)
   int max_frames = 0;                      // per sequence, 0 = all

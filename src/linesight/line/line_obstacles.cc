@@ -145,11 +145,13 @@ struct PieceExtent {
   }
 };
 
-// Marks, in `keep`, every piece whose extent comes within `gap_m` of a kept piece's, repeatedly
-// (a chain of pieces hanging from one another joins too). Label 0 is the background.
-void JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector<int>& label,
-                            double gap_m, std::vector<bool>* keep) {
-  if (gap_m <= 0) return;
+// Marks, in `keep`, every piece whose extent comes within `gap_m` of the conductor's cross-section
+// (radius_m around the axis) or of a kept piece's, repeatedly (a chain of pieces hanging from one
+// another joins too). Label 0 is the background. Returns the number of pieces joined to the
+// conductor directly.
+int JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector<int>& label,
+                           double gap_m, double radius_m, std::vector<bool>* keep) {
+  if (gap_m <= 0) return 0;
   const size_t count = keep->size();
   std::vector<std::array<std::vector<double>, 3>> coords(count);
   for (size_t i = 0; i < run.size(); ++i) {
@@ -166,6 +168,19 @@ void JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector
       extent[l].hi[k] = Quantile(coords[l][k], 0.95);
     }
   }
+  // The conductor itself: a fitting's grip on it may be too thin to be a body (a damper's clamp is
+  // 44 mm across a 28 mm conductor), so its hanging parts join the line directly.
+  PieceExtent line;
+  line.lo[0] = -std::numeric_limits<double>::infinity();
+  line.hi[0] = std::numeric_limits<double>::infinity();
+  line.lo[1] = line.lo[2] = -radius_m;
+  line.hi[1] = line.hi[2] = radius_m;
+  int joined_to_line = 0;
+  for (size_t l = 1; l < count; ++l) {
+    if ((*keep)[l] || coords[l][0].empty() || extent[l].GapTo(line) > gap_m) continue;
+    (*keep)[l] = true;
+    ++joined_to_line;
+  }
   for (bool grew = true; grew;) {
     grew = false;
     for (size_t l = 1; l < count; ++l) {
@@ -178,13 +193,15 @@ void JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector
       }
     }
   }
+  return joined_to_line;
 }
 
 // The points of a run that belong to an obstacle of this line: the run's 8-connected pieces in the
 // image (1 px gaps closed) that touch the conductor with at least min_attached_pixels points. A
 // piece of the tower or of a mismatched background that shares the run's stretch of line but is
 // not joined to the conductor is left out, so it neither makes an obstacle nor changes one's
-// shape. *attached counts the kept points on the line.
+// shape. *attached counts the kept points on the line, and min_attached_pixels for each piece
+// joined to the conductor without touching it.
 std::vector<LinePoint> AttachedPieces(const std::vector<LinePoint>& run,
                                       const ConductorModel& model, const StereoGeometry& g,
                                       const LineObstacleOptions& o, int* attached) {
@@ -209,12 +226,15 @@ std::vector<LinePoint> AttachedPieces(const std::vector<LinePoint>& run,
   }
   std::vector<bool> keep(size_t(count), false);
   for (int l = 1; l < count; ++l) keep[size_t(l)] = on_line[l] >= o.min_attached_pixels;
-  JoinThinlyLinkedPieces(run, label, o.join_gap_m, &keep);
+  const int joined_to_line = JoinThinlyLinkedPieces(
+      run, label, o.join_gap_m,
+      model.line.radius_m > 0 ? model.line.radius_m : o.conductor.max_radius_m, &keep);
   std::vector<LinePoint> kept;
   for (size_t i = 0; i < run.size(); ++i) {
     if (keep[size_t(label[i])]) kept.push_back(run[i]);
   }
   for (int l = 1; l < count; ++l) *attached += on_line[l] >= o.min_attached_pixels ? on_line[l] : 0;
+  *attached += joined_to_line * o.min_attached_pixels;
   return kept;
 }
 
@@ -264,8 +284,7 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
 // own (the model's d(tau) is least sure beyond the observed ends of the line, where a far obstacle
 // hides the conductor behind it).
 constexpr double kBandModelTolerance = 0.25;
-// Pixels on one surface across the band: log disparities within 1.5 depth bands of the body test
-// (ThinStructureOptions::depth_band_relative, 0.04), which takes a surface to span 3 bands.
+// Pixels on one surface across the band: log disparities within 0.06 (depths within +-6 %).
 constexpr double kSurfaceLogTolerance = 0.06;
 
 // The conductor's image band where it is wider than the conductor (CV_8U, 255 on the band's
@@ -459,6 +478,8 @@ void LineObstacleOptions::Check() const {
               "must be >= 0");
   CheckOption(speckle_range_px >= 0 && speckle_range_px <= 100,
               "LineObstacleOptions.speckle_range_px", speckle_range_px, "must be in [0, 100] px");
+  CheckOption(body_depth_band > 0 && body_depth_band <= 0.2, "LineObstacleOptions.body_depth_band",
+              body_depth_band, "must be in (0, 0.2]");
   CheckOption(min_pixels >= 1, "LineObstacleOptions.min_pixels", min_pixels, "must be >= 1");
   CheckOption(min_area_m2 >= 0 && min_area_m2 < 0.1, "LineObstacleOptions.min_area_m2", min_area_m2,
               "must be in [0, 0.1) m^2");
@@ -517,6 +538,7 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   thin.min_width_m = options.conductor.max_conductor_width_m;
   thin.min_depth_m = options.conductor.min_depth_m;
   thin.max_depth_m = options.conductor.max_depth_m;
+  thin.depth_band_relative = options.body_depth_band;
   const cv::Mat bodies =
       BodyMask(disparity, g, cv::Rect(0, 0, disparity.cols, disparity.rows), thin);
   LineObstacles result;

@@ -50,6 +50,12 @@ struct LineObstacleOptions {
   double corridor_side_m = 0.35;
   double corridor_above_m = 1.0;
   double corridor_below_m = 0.4;
+  // Bodies are surfaces at least conductor.max_conductor_width_m wide within 3 neighbouring depth
+  // bands of this width in ln(d) (ThinStructureOptions::depth_band_relative): 0.06 holds a surface
+  // over +-9 % of its depth, so a fitting near the robot, whose faces recede along the line of
+  // sight (a clamp's side 0.7-0.9 m ahead), stays one body; 0.04 cuts it into strips too narrow to
+  // be bodies.
+  double body_depth_band = 0.06;
   double max_arc_m = 8.0;       // farther along the line is not looked at (m)
   double cluster_gap_m = 0.12;  // a gap this long along the line separates two obstacles (m)
   // A pixel touches the conductor when it lies on the conductor's image band widened by this
@@ -77,9 +83,11 @@ struct LineObstacleOptions {
   // weights), so they are separate pieces in the image. A piece that does not touch the conductor
   // belongs to the obstacle when its extent in the conductor's frame (along, below/above and
   // beside the line, 5th-95th percentiles) comes within join_gap_m of a piece that does (or of one
-  // joined before): 0.15 m spans the link above a suspension clamp (0.09 m) and the messenger's
-  // gap to a damper weight (~0.1 m); a tower's leg beside the line stays out. 0 = only touching
-  // pieces.
+  // joined before), or of the conductor itself: a fitting's grip may be too thin to be a body (a
+  // damper's clamp is 44 mm across a 28 mm conductor), so near the robot, where the band's
+  // widening is not looked for, its weights hang from the line with nothing touching it. 0.15 m
+  // spans the link above a suspension clamp (0.09 m) and the messenger's gap to a damper weight
+  // (~0.1 m); a tower's leg beside the line stays out. 0 = only touching pieces.
   double join_gap_m = 0.15;
   // Far obstacles that are not bodies: where the conductor's image radius is below the matcher's
   // fattening, the conductor's band at its depth widened by at least min_widening_px and by

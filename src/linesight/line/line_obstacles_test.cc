@@ -214,6 +214,61 @@ TEST(LineObstaclesTest, AFragmentWhereTheLineMeetsANearClampIsNoObstacle) {
   EXPECT_GE(fragments, 1) << "no fragment without the area test: the test does not isolate it";
 }
 
+// Seed 9 (a tuning seed) as the robot reaches its second damper, 0.6-0.9 m ahead: the damper's
+// grip (44 mm across the 28 mm conductor) is too thin to be a body and too near for the band's
+// widening, so nothing of it touches the line; its near weight hangs 6 cm under it and joins the
+// conductor directly. The damper is found with its type and near end.
+TEST(LineObstaclesTest, ADampersWeightsHangingFromTheLineMakeItAnObstacleWithAThinGrip) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(9));
+  int found_with_type = 0, scored = 0;
+  for (int index : {172, 176, 180}) {
+    const sim::PowerLineScene scene = sequence.Render(index);
+    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
+    const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+    const LineObstacles found = FindLineObstacles(pipeline, frame, {});
+    ASSERT_TRUE(found.conductor.ok()) << "frame " << index << ": " << found.conductor.reason;
+    for (const sim::RenderedObstacle& truth : scene.obstacles) {
+      if (truth.near_arc_m < 0.5 || truth.near_arc_m > 1.0) continue;
+      ++scored;
+      const int k = MatchTruth(found, truth);
+      EXPECT_GE(k, 0) << "frame " << index << ": the damper " << truth.near_arc_m
+                      << " m ahead is missed";
+      found_with_type += k >= 0 && found.obstacles[k].type == LineObstacleType::kDamper;
+    }
+  }
+  EXPECT_EQ(scored, 3);
+  EXPECT_GE(found_with_type, 2);
+}
+
+// Seed 6 (a tuning seed) as the robot reaches a suspension clamp 0.55-0.8 m ahead: the clamp's
+// faces recede along the line of sight, and in depth bands of 0.04 in ln(d) they fall apart into
+// strips narrower than a body. With the line stage's bands (body_depth_band) it is one obstacle.
+TEST(LineObstaclesTest, ANearClampWhoseFacesRecedeIsFound) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(6));
+  LineObstacleOptions narrow_bands;
+  narrow_bands.body_depth_band = 0.04;
+  int found_now = 0, found_narrow = 0, scored = 0;
+  for (int index : {174, 178, 182}) {
+    const sim::PowerLineScene scene = sequence.Render(index);
+    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
+    const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+    const LineObstacles found = FindLineObstacles(pipeline, frame, {});
+    const LineObstacles narrow = FindLineObstacles(pipeline, frame, narrow_bands);
+    for (const sim::RenderedObstacle& truth : scene.obstacles) {
+      if (truth.type != sim::ObstacleType::kSuspensionClamp || truth.near_arc_m > 1.0) continue;
+      ++scored;
+      const int k = MatchTruth(found, truth);
+      EXPECT_GE(k, 0) << "frame " << index << ": the clamp " << truth.near_arc_m
+                      << " m ahead is missed";
+      found_now += k >= 0 && found.obstacles[k].type == LineObstacleType::kClamp;
+      found_narrow += MatchTruth(narrow, truth) >= 0;
+    }
+  }
+  EXPECT_EQ(scored, 3);
+  EXPECT_EQ(found_now, 3);
+  EXPECT_LT(found_narrow, found_now) << "narrow bands find it too: the test does not isolate them";
+}
+
 TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   sim::PowerLineSceneOptions scene_options;
   scene_options.sensor.supersampling = 1;
@@ -229,6 +284,9 @@ TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   LineObstacleOptions bad;
   bad.corridor_side_m = 0;
   EXPECT_THROW(FindLineObstacles(pipeline, frame, bad), OptionError);
+  LineObstacleOptions bad_band;
+  bad_band.body_depth_band = 0;
+  EXPECT_THROW(FindLineObstacles(pipeline, frame, bad_band), OptionError);
   LineObstacleOptions bad_area;
   bad_area.min_area_m2 = -1e-4;
   EXPECT_THROW(FindLineObstacles(pipeline, frame, bad_area), OptionError);
