@@ -538,13 +538,13 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   thin.min_width_m = options.conductor.max_conductor_width_m;
   thin.min_depth_m = options.conductor.min_depth_m;
   thin.max_depth_m = options.conductor.max_depth_m;
-  thin.depth_band_relative = options.body_depth_band;
-  const cv::Mat bodies =
-      BodyMask(disparity, g, cv::Rect(0, 0, disparity.cols, disparity.rows), thin);
+  // The conductor is fitted outside the bodies of the body test's own depth bands.
+  const cv::Rect image(0, 0, disparity.cols, disparity.rows);
+  const cv::Mat conductor_bodies = BodyMask(disparity, g, image, thin);
   LineObstacles result;
   ConductorOptions conductor = options.conductor;
   conductor.searched_max_disparity_px = pipeline.search_range().max_disparity();
-  result.conductor = FitConductor(disparity, g, conductor, bodies, previous);
+  result.conductor = FitConductor(disparity, g, conductor, conductor_bodies, previous);
   if (!result.conductor.ok()) return result;
   cv::Mat despeckled = Despeckle(disparity, options);
   // Far obstacles on the line are bodies too. The speckle filter is meant for stray matches, which
@@ -552,6 +552,11 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   // depth) are kept.
   const cv::Mat widening = WideningOfTheLine(disparity, result.conductor, g, options);
   disparity.copyTo(despeckled, widening);
+  ThinStructureOptions obstacle_thin = thin;
+  obstacle_thin.depth_band_relative = options.body_depth_band;
+  const cv::Mat bodies = obstacle_thin.depth_band_relative == thin.depth_band_relative
+                             ? conductor_bodies
+                             : BodyMask(disparity, g, image, obstacle_thin);
   const cv::Mat obstacle_bodies = bodies | widening;
   std::vector<LinePoint> points = CorridorPoints(despeckled, obstacle_bodies, g, result.conductor,
                                                  options, &result.body_pixels);

@@ -50,11 +50,12 @@ struct LineObstacleOptions {
   double corridor_side_m = 0.35;
   double corridor_above_m = 1.0;
   double corridor_below_m = 0.4;
-  // Bodies are surfaces at least conductor.max_conductor_width_m wide within 3 neighbouring depth
-  // bands of this width in ln(d) (ThinStructureOptions::depth_band_relative): 0.06 holds a surface
-  // over +-9 % of its depth, so a fitting near the robot, whose faces recede along the line of
-  // sight (a clamp's side 0.7-0.9 m ahead), stays one body; 0.04 cuts it into strips too narrow to
-  // be bodies.
+  // Obstacles are bodies: surfaces at least conductor.max_conductor_width_m wide within 3
+  // neighbouring depth bands of this width in ln(d) (ThinStructureOptions::depth_band_relative):
+  // 0.06 holds a surface over +-9 % of its depth, so a fitting near the robot, whose faces recede
+  // along the line of sight (a clamp's side 0.7-0.9 m ahead), stays one body; 0.04 cuts it into
+  // strips too narrow to be bodies. The conductor is fitted outside the bodies of the body test's
+  // own 0.04: with these wider bands more frames held two equally near "conductors".
   double body_depth_band = 0.06;
   double max_arc_m = 8.0;       // farther along the line is not looked at (m)
   double cluster_gap_m = 0.12;  // a gap this long along the line separates two obstacles (m)
