@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -28,6 +29,18 @@ int MatchTruth(const LineObstacles& found, const sim::RenderedObstacle& truth) {
     }
   }
   return match;
+}
+
+// The obstacles found on a rendered frame (isgm on one thread, the scene's true calibration) with
+// each of `options`.
+std::vector<LineObstacles> FindOnScene(const sim::PowerLineScene& scene,
+                                       const std::vector<LineObstacleOptions>& options) {
+  const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
+  const RangingFrame frame = pipeline.Process(scene.left, scene.right);
+  std::vector<LineObstacles> found;
+  for (const LineObstacleOptions& o : options)
+    found.push_back(FindLineObstacles(pipeline, frame, o));
+  return found;
 }
 
 // Tuning seed 3, the last frames of the approach (every 20th from 140): the obstacle nearest along
@@ -188,10 +201,9 @@ TEST(LineObstaclesTest, AFragmentWhereTheLineMeetsANearClampIsNoObstacle) {
   int fragments = 0;
   for (int index : {152, 156, 162}) {
     const sim::PowerLineScene scene = sequence.Render(index);
-    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
-    const RangingFrame frame = pipeline.Process(scene.left, scene.right);
-    const LineObstacles found = FindLineObstacles(pipeline, frame, {});
-    const LineObstacles unfiltered = FindLineObstacles(pipeline, frame, no_area);
+    const std::vector<LineObstacles> both = FindOnScene(scene, {{}, no_area});
+    const LineObstacles& found = both[0];
+    const LineObstacles& unfiltered = both[1];
     for (const sim::RenderedObstacle& truth : scene.obstacles) {
       if (truth.type == sim::ObstacleType::kSuspensionClamp && truth.near_arc_m < 2) {
         EXPECT_GE(MatchTruth(found, truth), 0) << "frame " << index << ": the clamp is missed";
@@ -223,9 +235,7 @@ TEST(LineObstaclesTest, ADampersWeightsHangingFromTheLineMakeItAnObstacleWithATh
   int found_with_type = 0, scored = 0;
   for (int index : {172, 176, 180}) {
     const sim::PowerLineScene scene = sequence.Render(index);
-    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
-    const RangingFrame frame = pipeline.Process(scene.left, scene.right);
-    const LineObstacles found = FindLineObstacles(pipeline, frame, {});
+    const LineObstacles found = FindOnScene(scene, {{}})[0];
     ASSERT_TRUE(found.conductor.ok()) << "frame " << index << ": " << found.conductor.reason;
     for (const sim::RenderedObstacle& truth : scene.obstacles) {
       if (truth.near_arc_m < 0.5 || truth.near_arc_m > 1.0) continue;
@@ -250,10 +260,9 @@ TEST(LineObstaclesTest, ANearClampWhoseFacesRecedeIsFound) {
   int found_now = 0, found_narrow = 0, scored = 0;
   for (int index : {174, 178, 182}) {
     const sim::PowerLineScene scene = sequence.Render(index);
-    const RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
-    const RangingFrame frame = pipeline.Process(scene.left, scene.right);
-    const LineObstacles found = FindLineObstacles(pipeline, frame, {});
-    const LineObstacles narrow = FindLineObstacles(pipeline, frame, narrow_bands);
+    const std::vector<LineObstacles> both = FindOnScene(scene, {{}, narrow_bands});
+    const LineObstacles& found = both[0];
+    const LineObstacles& narrow = both[1];
     for (const sim::RenderedObstacle& truth : scene.obstacles) {
       if (truth.type != sim::ObstacleType::kSuspensionClamp || truth.near_arc_m > 1.0) continue;
       ++scored;
