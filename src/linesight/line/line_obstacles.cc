@@ -145,6 +145,22 @@ struct PieceExtent {
   }
 };
 
+// The extent of a non-empty set of points.
+PieceExtent ExtentOf(const std::vector<LinePoint>& points) {
+  std::array<std::vector<double>, 3> c;
+  for (const LinePoint& p : points) {
+    c[0].push_back(p.arc);
+    c[1].push_back(p.down);
+    c[2].push_back(p.side);
+  }
+  PieceExtent e;
+  for (size_t k = 0; k < 3; ++k) {
+    e.lo[k] = Quantile(c[k], 0.05);
+    e.hi[k] = Quantile(c[k], 0.95);
+  }
+  return e;
+}
+
 // Marks, in `keep`, every piece whose extent comes within `gap_m` of the conductor's cross-section
 // (radius_m around the axis) or of a kept piece's, repeatedly (a chain of pieces hanging from one
 // another joins too). Label 0 is the background. Returns the number of pieces joined to the
@@ -153,20 +169,11 @@ int JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector<
                            double gap_m, double radius_m, std::vector<bool>* keep) {
   if (gap_m <= 0) return 0;
   const size_t count = keep->size();
-  std::vector<std::array<std::vector<double>, 3>> coords(count);
-  for (size_t i = 0; i < run.size(); ++i) {
-    auto& c = coords[size_t(label[i])];
-    c[0].push_back(run[i].arc);
-    c[1].push_back(run[i].down);
-    c[2].push_back(run[i].side);
-  }
+  std::vector<std::vector<LinePoint>> pieces(count);
+  for (size_t i = 0; i < run.size(); ++i) pieces[size_t(label[i])].push_back(run[i]);
   std::vector<PieceExtent> extent(count);
   for (size_t l = 1; l < count; ++l) {
-    if (coords[l][0].empty()) continue;
-    for (int k = 0; k < 3; ++k) {
-      extent[l].lo[k] = Quantile(coords[l][k], 0.05);
-      extent[l].hi[k] = Quantile(coords[l][k], 0.95);
-    }
+    if (!pieces[l].empty()) extent[l] = ExtentOf(pieces[l]);
   }
   // The conductor itself: a fitting's grip on it may be too thin to be a body (a damper's clamp is
   // 44 mm across a 28 mm conductor), so its hanging parts join the line directly.
@@ -177,14 +184,14 @@ int JoinThinlyLinkedPieces(const std::vector<LinePoint>& run, const std::vector<
   line.hi[1] = line.hi[2] = radius_m;
   int joined_to_line = 0;
   for (size_t l = 1; l < count; ++l) {
-    if ((*keep)[l] || coords[l][0].empty() || extent[l].GapTo(line) > gap_m) continue;
+    if ((*keep)[l] || pieces[l].empty() || extent[l].GapTo(line) > gap_m) continue;
     (*keep)[l] = true;
     ++joined_to_line;
   }
   for (bool grew = true; grew;) {
     grew = false;
     for (size_t l = 1; l < count; ++l) {
-      if ((*keep)[l] || coords[l][0].empty()) continue;
+      if ((*keep)[l] || pieces[l].empty()) continue;
       for (size_t k = 1; k < count; ++k) {
         if ((*keep)[k] && extent[l].GapTo(extent[k]) <= gap_m) {
           (*keep)[l] = grew = true;
@@ -236,6 +243,32 @@ std::vector<LinePoint> AttachedPieces(const std::vector<LinePoint>& run,
   for (int l = 1; l < count; ++l) *attached += on_line[l] >= o.min_attached_pixels ? on_line[l] : 0;
   *attached += joined_to_line * o.min_attached_pixels;
   return kept;
+}
+
+// The parts of runs that belong to an obstacle of this line (AttachedPieces), with neighbouring
+// runs joined when their extents in the conductor's frame come within o.join_runs_gap_m of each
+// other (see there).
+std::vector<std::vector<LinePoint>> JoinCloseRuns(std::vector<std::vector<LinePoint>> runs,
+                                                  const ConductorModel& model,
+                                                  const StereoGeometry& g,
+                                                  const LineObstacleOptions& o) {
+  std::vector<std::vector<LinePoint>> joined;
+  PieceExtent last;
+  for (std::vector<LinePoint>& run : runs) {
+    if (static_cast<int>(run.size()) < o.min_pixels) continue;
+    int attached = 0;
+    std::vector<LinePoint> kept = AttachedPieces(run, model, g, o, &attached);
+    if (kept.empty() || attached < o.min_attached_pixels) continue;
+    const PieceExtent e = ExtentOf(kept);
+    if (!joined.empty() && o.join_runs_gap_m > 0 && last.GapTo(e) <= o.join_runs_gap_m) {
+      joined.back().insert(joined.back().end(), kept.begin(), kept.end());
+      last = ExtentOf(joined.back());
+    } else {
+      joined.push_back(std::move(kept));
+      last = e;
+    }
+  }
+  return joined;
 }
 
 // Shape, box and mask of one run; false when it is not an obstacle of this line.
@@ -485,6 +518,8 @@ void LineObstacleOptions::Check() const {
               "must be in [0, 0.1) m^2");
   CheckOption(min_attached_pixels >= 1, "LineObstacleOptions.min_attached_pixels",
               min_attached_pixels, "must be >= 1");
+  CheckOption(join_runs_gap_m >= 0 && join_runs_gap_m <= 1, "LineObstacleOptions.join_runs_gap_m",
+              join_runs_gap_m, "must be in [0, 1] m");
   CheckOption(join_gap_m >= 0 && join_gap_m <= 1, "LineObstacleOptions.join_gap_m", join_gap_m,
               "must be in [0, 1] m");
   CheckOption(min_widening_px >= 0, "LineObstacleOptions.min_widening_px", min_widening_px,
@@ -563,7 +598,8 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   result.corridor_pixels = static_cast<int>(points.size());
   cv::Mat masked(disparity.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   for (const std::vector<LinePoint>& run :
-       SplitAlongLine(std::move(points), options.cluster_gap_m)) {
+       JoinCloseRuns(SplitAlongLine(std::move(points), options.cluster_gap_m), result.conductor, g,
+                     options)) {
     LineObstacle o;
     if (!Describe(run, result.conductor, g, options, &o)) continue;
     Range(pipeline, frame, despeckled, result.conductor, &masked, &o);

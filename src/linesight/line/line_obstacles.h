@@ -59,6 +59,12 @@ struct LineObstacleOptions {
   double body_depth_band = 0.06;
   double max_arc_m = 8.0;       // farther along the line is not looked at (m)
   double cluster_gap_m = 0.12;  // a gap this long along the line separates two obstacles (m)
+  // ... unless the two runs' extents in the conductor's frame (along, below/above and beside the
+  // line, 5th-95th percentiles) come within join_runs_gap_m of each other: one fitting may be split
+  // along the line (a damper seen end-on shows its near weight's cap, then its clamp 0.18 m on,
+  // the weight's body hidden behind the cap). 0.25 m is half the longest fitting (a damper,
+  // 0.45 m); neighbouring fittings on a line are further apart. 0 = runs are never joined.
+  double join_runs_gap_m = 0.25;
   // A pixel touches the conductor when it lies on the conductor's image band widened by this
   // margin (px) at a depth within attach_depth_m (or 1 px of disparity) of the conductor's there.
   // 0.25 m is half the length of the longest obstacle (a damper, 0.45 m): seen along the line, its

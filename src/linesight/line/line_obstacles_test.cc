@@ -193,11 +193,13 @@ TEST(LineObstaclesTest, AFarClampIsFoundWhereItWidensTheConductorsBand) {
 
 // Tuning seed 3 as the robot nears its first clamp (1-1.5 m ahead): where the line meets the clamp
 // the matcher's fill forms a body 30-50 px across, 0.3 m nearer along the line than the clamp, a
-// few cm^2 at its depth. It is no obstacle (min_area_m2); the clamp itself is found.
+// few cm^2 at its depth. On its own it is no obstacle (min_area_m2), and it may join the clamp's
+// run (join_runs_gap_m); the clamp itself is found within 5 % along the line.
 TEST(LineObstaclesTest, AFragmentWhereTheLineMeetsANearClampIsNoObstacle) {
   const sim::PowerLineSequence sequence(testing::FastSequence(3));
   LineObstacleOptions no_area;
   no_area.min_area_m2 = 0;
+  no_area.join_runs_gap_m = 0;  // else the fragment joins the clamp's run
   int fragments = 0;
   for (int index : {152, 156, 162}) {
     const sim::PowerLineScene scene = sequence.Render(index);
@@ -250,6 +252,41 @@ TEST(LineObstaclesTest, ADampersWeightsHangingFromTheLineMakeItAnObstacleWithATh
   EXPECT_GE(found_with_type, 2);
 }
 
+// Seed 9 (a tuning seed) with a damper 0.9-1.1 m ahead, seen almost end-on: its near weight's cap
+// and its clamp are 0.15-0.2 m apart along the line, farther than cluster_gap_m, with the weight's
+// body between them seen edge-on. They are one obstacle, a damper; nothing else is reported there.
+TEST(LineObstaclesTest, ADamperSeenEndOnIsOneObstacle) {
+  const sim::PowerLineSequence sequence(testing::FastSequence(9));
+  LineObstacleOptions unjoined;
+  unjoined.join_runs_gap_m = 0;
+  int scored = 0, split = 0;
+  for (int index : {162, 166, 170}) {
+    const sim::PowerLineScene scene = sequence.Render(index);
+    const std::vector<LineObstacles> both = FindOnScene(scene, {{}, unjoined});
+    const LineObstacles& found = both[0];
+    ASSERT_TRUE(found.conductor.ok()) << "frame " << index << ": " << found.conductor.reason;
+    for (const sim::RenderedObstacle& truth : scene.obstacles) {
+      if (truth.near_arc_m < 0.8 || truth.near_arc_m > 1.2) continue;
+      ++scored;
+      for (const LineObstacle& o : both[1].obstacles) {
+        split += o.arc_m > truth.near_arc_m + 0.1 && o.arc_m < truth.near_arc_m + 0.5;
+      }
+      const int k = MatchTruth(found, truth);
+      ASSERT_GE(k, 0) << "frame " << index << ": the damper " << truth.near_arc_m
+                      << " m ahead is missed";
+      EXPECT_EQ(found.obstacles[k].type, LineObstacleType::kDamper) << "frame " << index;
+      for (size_t q = 0; q < found.obstacles.size(); ++q) {
+        if (static_cast<int>(q) == k) continue;
+        EXPECT_GT(std::fabs(found.obstacles[q].arc_m - truth.near_arc_m), 0.5)
+            << "frame " << index << ": a second obstacle " << found.obstacles[q].arc_m
+            << " m along the line next to the damper";
+      }
+    }
+  }
+  EXPECT_EQ(scored, 3);
+  EXPECT_GE(split, 1) << "no split damper with the runs unjoined: the test does not isolate it";
+}
+
 // Seed 6 (a tuning seed) as the robot reaches a suspension clamp 0.55-0.8 m ahead: the clamp's
 // faces recede along the line of sight, and in depth bands of 0.04 in ln(d) they fall apart into
 // strips narrower than a body. With the line stage's bands (body_depth_band) it is one obstacle.
@@ -293,6 +330,9 @@ TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   LineObstacleOptions bad;
   bad.corridor_side_m = 0;
   EXPECT_THROW(FindLineObstacles(pipeline, frame, bad), OptionError);
+  LineObstacleOptions bad_runs_gap;
+  bad_runs_gap.join_runs_gap_m = -0.1;
+  EXPECT_THROW(FindLineObstacles(pipeline, frame, bad_runs_gap), OptionError);
   LineObstacleOptions bad_band;
   bad_band.body_depth_band = 0;
   EXPECT_THROW(FindLineObstacles(pipeline, frame, bad_band), OptionError);
