@@ -193,7 +193,14 @@ try {
   await page.click("#clear");
 
   // The end of the run: what the page shows against the truth of its last frame.
-  await until("the end of the run", async () => (await api("/api/status")).running === false, 120000);
+  // On a loaded machine a frame can take seconds, so the run may take minutes to end: the wait
+  // fails only when the pipeline stops moving (no new frame for 60 s) while still running.
+  for (let seen = -1, stallEnd = 0; ; await sleep(200)) {
+    const st = await api("/api/status");
+    if (st.running === false) break;
+    if (st.frame !== seen) { seen = st.frame; stallEnd = Date.now() + 60000; }
+    if (Date.now() > stallEnd) throw new Error(`the run stalled at frame ${seen} (no new frame for 60 s)`);
+  }
   await sleep(1500);  // the page's next event
   const badge = await page.textContent("#badge");
   check(badge === "SOURCE ENDED", `the badge says the source ended ("${badge}")`);
