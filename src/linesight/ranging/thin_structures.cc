@@ -80,38 +80,118 @@ void DilateRows(const cv::Mat& src, const std::vector<int>& rows, cv::Mat* out, 
   // Distances saturate at 255: a run's half-width is at most 254 (n <= 509).
   LS_CHECK(rows.size() <= 509);
   constexpr int kFar = 255;
-  s->near.create(src.size(), CV_8U);
-  for (int y = 0; y < src.rows; ++y) {
+  // Rows are worked on in whole blocks of kBlock bytes (the padding is far from everything), so
+  // the compare-and-or below has no scalar tail: the crops worked on are often ~100 px wide.
+  constexpr int kBlock = 64;
+  const int cols = src.cols, height = src.rows, wide = (cols + kBlock - 1) / kBlock * kBlock;
+  s->near.create(height, wide, CV_8U);
+  for (int y = 0; y < height; ++y) {
     const std::uint8_t* in = src.ptr<std::uint8_t>(y);
     std::uint8_t* d = s->near.ptr<std::uint8_t>(y);
     int last = -kFar;
-    for (int x = 0; x < src.cols; ++x) {
+    for (int x = 0; x < cols; ++x) {
       if (in[x]) last = x;
       d[x] = std::uint8_t(std::min(kFar, x - last));
     }
     last = std::numeric_limits<int>::max() / 2;
-    for (int x = src.cols - 1; x >= 0; --x) {
+    for (int x = cols - 1; x >= 0; --x) {
       if (in[x]) last = x;
       d[x] = std::uint8_t(std::min<int>(d[x], std::min(kFar, last - x)));
     }
+    std::fill(d + cols, d + wide, std::uint8_t(kFar));
   }
-  out->create(src.size(), CV_8U);
-  const int half = int(rows.size()) / 2, cols = src.cols, height = src.rows;
+  s->wide.create(height, wide, CV_8U);
+  const int half = int(rows.size()) / 2;
   for (int y = 0; y < height; ++y) {
-    std::uint8_t* __restrict o = out->ptr<std::uint8_t>(y);
-    std::fill(o, o + cols, std::uint8_t(0));
+    std::uint8_t* __restrict o = s->wide.ptr<std::uint8_t>(y);
+    std::fill(o, o + wide, std::uint8_t(0));
     for (int j = 0; j < int(rows.size()); ++j) {
       const int yy = y + j - half;
       if (rows[size_t(j)] < 0 || yy < 0 || yy >= height) continue;
       const std::uint8_t* __restrict d = s->near.ptr<std::uint8_t>(yy);
       const std::uint8_t w = std::uint8_t(rows[size_t(j)]);
       // One byte compare a pixel, unconditionally stored, which the compiler vectorises.
-      for (int x = 0; x < cols; ++x) o[x] = std::uint8_t(o[x] | (d[x] <= w ? 0xff : 0));
+      for (int x0 = 0; x0 < wide; x0 += kBlock) {
+        for (int x = x0; x < x0 + kBlock; ++x) o[x] = std::uint8_t(o[x] | (d[x] <= w ? 0xff : 0));
+      }
     }
   }
+  s->wide.colRange(0, cols).copyTo(*out);
+}
+
+// OpenCV's 5x5 chamfer distance (cv::distanceTransform with DIST_L2, DIST_MASK_5): steps of
+// 1, 1.4 and 2.1969 px along the axes, the diagonals and the knight's moves, in 16.16 fixed point.
+constexpr int kChamferShift = 16;
+const int kChamferAxis = cvRound(1.0f * (1 << kChamferShift));
+const int kChamferDiagonal = cvRound(1.4f * (1 << kChamferShift));
+const int kChamferKnight = cvRound(2.1969f * (1 << kChamferShift));
+
+// Half-width of each row of the ball {v : chamfer(v) < radius} (rows -R..R, each one centred
+// run): a pixel is nearer than `radius` to a set pixel exactly when it lies in the set's
+// dilation by this ball. The chamfer length of an offset is the cheapest sum of steps reaching
+// it (all steps point into its quadrant), and is compared as the float OpenCV returns.
+std::vector<int> ChamferBallRows(double radius) {
+  const int reach = int(std::ceil(radius)) + 1;
+  std::vector<std::int64_t> length(size_t((reach + 1) * (reach + 1)));
+  auto at = [&](int x, int y) -> std::int64_t& { return length[size_t(y * (reach + 1) + x)]; };
+  const struct {
+    int dx, dy, weight;
+  } steps[] = {{1, 0, kChamferAxis},
+               {0, 1, kChamferAxis},
+               {1, 1, kChamferDiagonal},
+               {2, 1, kChamferKnight},
+               {1, 2, kChamferKnight}};
+  for (int y = 0; y <= reach; ++y) {
+    for (int x = 0; x <= reach; ++x) {
+      std::int64_t best = x == 0 && y == 0 ? 0 : std::numeric_limits<std::int64_t>::max();
+      for (const auto& st : steps) {
+        if (st.dx <= x && st.dy <= y) best = std::min(best, at(x - st.dx, y - st.dy) + st.weight);
+      }
+      at(x, y) = best;
+    }
+  }
+  const float scale = 1.f / float(1 << kChamferShift);
+  auto inside = [&](int x, int y) { return double(float(at(x, y)) * scale) < radius; };
+  std::vector<int> half(size_t(2 * reach + 1), -1);
+  for (int y = 0; y <= reach; ++y) {
+    int w = -1;
+    while (w + 1 <= reach && inside(w + 1, y)) ++w;
+    // One run per row: nothing beyond the first offset outside the ball is inside again.
+    for (int x = w + 1; x <= reach; ++x) LS_CHECK(!inside(x, y));
+    half[size_t(reach + y)] = half[size_t(reach - y)] = w;
+  }
+  LS_CHECK(half.front() < 0 && half.back() < 0);  // the ball ends inside `reach`
+  return half;
 }
 
 }  // namespace
+
+void NearerThan(const cv::Mat& off, double radius, cv::Mat* out, EllipseScratch* scratch) {
+  LS_CHECK(off.type() == CV_8UC1 && radius > 0.0);
+  std::vector<int> rows = ChamferBallRows(radius);
+  // Trim the empty rows at both ends (the element stays centred).
+  size_t trim = 0;
+  while (rows[trim] < 0 && rows[rows.size() - 1 - trim] < 0) ++trim;
+  rows = std::vector<int>(rows.begin() + std::ptrdiff_t(trim), rows.end() - std::ptrdiff_t(trim));
+  if (int(rows.size()) > kSmallEllipse) {
+    // A large ball costs a compare per row per pixel; the distance transform costs the same for
+    // any radius.
+    cv::compare(off, 0, scratch->complement, cv::CMP_EQ);
+    cv::distanceTransform(scratch->complement, scratch->distance, cv::DIST_L2, cv::DIST_MASK_5);
+    cv::compare(scratch->distance, radius, *out, cv::CMP_LT);
+    return;
+  }
+  {
+    const int n = int(rows.size());
+    cv::Mat element(n, n, CV_8U, cv::Scalar(0));
+    for (int y = 0; y < n; ++y) {
+      if (rows[size_t(y)] >= 0) {
+        element.row(y).colRange(n / 2 - rows[size_t(y)], n / 2 + rows[size_t(y)] + 1).setTo(1);
+      }
+    }
+    cv::dilate(off, *out, element);
+  }
+}
 
 void DilateEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch) {
   LS_CHECK(src.type() == CV_8UC1);
@@ -141,7 +221,7 @@ void CloseEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scrat
 }
 
 cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const cv::Rect& region,
-                 const ThinStructureOptions& options, bool seeds_only) {
+                 const ThinStructureOptions& options, bool seeds_only, const BandRegion& needed) {
   options.Check();
   LS_CHECK(disparity.type() == CV_32FC1);
   const cv::Rect image(0, 0, disparity.cols, disparity.rows);
@@ -180,11 +260,26 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   // radius plus two pixels leaves a ring of pixels off the surface inside the crop: every distance
   // from a pixel of the box to the nearest pixel off the surface is then measured inside the crop,
   // and the growth from the seeds is cut to the closed surface, which is inside the crop too.
-  std::vector<cv::Rect> box_of(static_cast<size_t>(bands));
+  struct Bounds {
+    int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
+  };
+  std::vector<Bounds> bounds(static_cast<size_t>(bands));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
     for (int x = 0; x < band_of.cols; ++x) {
-      if (b[x] >= 0) box_of[size_t(b[x])] |= cv::Rect(x, y, 1, 1);
+      if (b[x] < 0) continue;
+      Bounds& k = bounds[size_t(b[x])];
+      k.x0 = std::min(k.x0, x);
+      k.x1 = std::max(k.x1, x);
+      k.y0 = std::min(k.y0, y);
+      k.y1 = std::max(k.y1, y);
+    }
+  }
+  std::vector<cv::Rect> box_of(static_cast<size_t>(bands));
+  for (size_t k = 0; k < bounds.size(); ++k) {
+    if (bounds[k].x1 >= 0) {
+      box_of[k] = cv::Rect(cv::Point(bounds[k].x0, bounds[k].y0),
+                           cv::Point(bounds[k].x1 + 1, bounds[k].y1 + 1));
     }
   }
   const cv::Rect whole(0, 0, view.cols, view.rows);
@@ -192,7 +287,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   const bool at_border =
       outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
   cv::Mat body(view.size(), CV_8U, cv::Scalar(0));
-  cv::Mat surface, padded, distance, seeds, grown, in_band;
+  cv::Mat surface, padded, off, near_off, seeds, grown, in_band;
   EllipseScratch scratch;
   for (int k = 0; k < bands; ++k) {
     if (box_of[size_t(k)].empty()) continue;
@@ -206,7 +301,21 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     // conductor.
     const int close = std::max(3, int(std::round(radius)) | 1);
     const int reach = close / 2 + 2;
-    const cv::Rect crop = (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & whole;
+    cv::Rect crop = (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & whole;
+    if (needed) {
+      // Only the needed pixels of bands k - 1..k + 1 must come out right: a body pixel there grows
+      // from seeds within r, a seed needs the closed surface within its ball, and the closing
+      // needs the surface within twice its element's half-width.
+      const double d_from =
+          std::max(d_low, std::exp(depth_bands.log_low + (k - 1) * depth_bands.width) - offset);
+      const double d_to =
+          std::min(d_high, std::exp(depth_bands.log_low + (k + 2) * depth_bands.width) - offset);
+      const cv::Rect need = needed(d_from, d_to) - outer.tl();
+      if ((need & whole).empty()) continue;
+      const int m = 2 * r + 1 + 2 * (close / 2) + 2;
+      crop &= need + cv::Size(2 * m, 2 * m) - cv::Point(m, m);
+      if (crop.empty()) continue;
+    }
     cv::inRange(band_of(crop), k - 1, k + 1, surface);
     CloseEllipse(surface, close, &surface, &scratch);
     // Beyond the view's own edges the surface continues (replicated), as if the view went on. (A
@@ -216,9 +325,12 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
         (crop.x == 0 || crop.y == 0 || crop.br().x == whole.width || crop.br().y == whole.height);
     const int pad = crop_at_border ? r + 1 : 0;
     cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
-    cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
+    // Seeds: pixels of the band with no pixel off the surface nearer than the radius.
+    cv::compare(padded, 0, off, cv::CMP_EQ);
+    NearerThan(off, radius, &near_off, &scratch);
     cv::compare(band_of(crop), k, in_band, cv::CMP_EQ);
-    seeds = (distance(cv::Rect(pad, pad, crop.width, crop.height)) >= radius) & in_band;
+    cv::bitwise_not(near_off(cv::Rect(pad, pad, crop.width, crop.height)), seeds);
+    seeds &= in_band;
     if (cv::countNonZero(seeds) == 0) continue;
     cv::Mat target = body(crop);
     if (seeds_only) {

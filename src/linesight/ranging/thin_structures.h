@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include <opencv2/core.hpp>
 
@@ -50,17 +51,29 @@ struct ThinStructureOptions {
 // n^2: the element is a stack of centred row runs, and a pixel is in a run's dilation when the
 // horizontal distance to the nearest set pixel of that row is at most the run's half-width.
 struct EllipseScratch {
-  cv::Mat near, complement, dilated;
+  cv::Mat near, wide, complement, dilated, distance;
 };
 void DilateEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
 void ErodeEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
 void CloseEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
 
+// Pixels nearer than `radius` to a set pixel of `off` (CV_8UC1, 0 / 255) in OpenCV's 5x5 chamfer
+// distance: exactly where cv::distanceTransform(complement of off, DIST_L2, DIST_MASK_5) is below
+// `radius` (outside the image counts as clear), as a dilation by the chamfer ball's row runs.
+void NearerThan(const cv::Mat& off, double radius, cv::Mat* out, EllipseScratch* scratch);
+
 // Returns (CV_8U, 255 = on a body) for `region` of the disparity; the pixels around `region` are
 // looked at too, so that the region's border does not cut a body. With `seeds_only` the result
 // holds only the pixels deep inside a body (before growing back), which is what automatic obstacle
 // finding starts from.
+//
+// With `needed`, only some pixels must come out right: needed(d_from, d_to) bounds (in disparity
+// map coordinates) the pixels with disparities in [d_from, d_to] whose result is used (an empty
+// rectangle: none). Pixels outside those bounds may be left off; the ones inside are the same as
+// without `needed`, at a cost that shrinks with the bounds.
+using BandRegion = std::function<cv::Rect(double d_from, double d_to)>;
 cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const cv::Rect& region,
-                 const ThinStructureOptions& options, bool seeds_only = false);
+                 const ThinStructureOptions& options, bool seeds_only = false,
+                 const BandRegion& needed = {});
 
 }  // namespace linesight

@@ -60,6 +60,36 @@ TEST(EllipseMorphologyTest, EqualsOpenCvMorphologyWithTheEllipseOnAwkwardSizes) 
   }
 }
 
+TEST(ChamferBallTest, NearerThanEqualsOpenCvsDistanceTransformOnAwkwardSizes) {
+  const cv::Size sizes[] = {{1, 1}, {2, 67}, {67, 2}, {61, 43}, {130, 77}, {203, 150}};
+  std::uint64_t seed = 11;
+  cv::Mat fast, distance;
+  EllipseScratch scratch;
+  for (const cv::Size size : sizes) {
+    // Sparse and dense clear pixels: the balls' whole rims are exercised.
+    for (const int density : {0, 1, 2}) {
+      cv::Mat off = RandomMask(size, seed++);
+      if (density == 1) {
+        off &= RandomMask(size, seed++);
+        off &= RandomMask(size, seed++);
+      }
+      if (density == 2) off.setTo(0);
+      if (density == 2 && size.area() > 4)
+        off.at<std::uint8_t>(size.height / 2, size.width / 3) = 255;
+      cv::Mat surface;
+      cv::compare(off, 0, surface, cv::CMP_EQ);
+      cv::distanceTransform(surface, distance, cv::DIST_L2, cv::DIST_MASK_5);
+      for (const double radius : {0.3, 1.0, 1.2, 1.4, 1.5, 2.0, 2.1969, 2.5, 3.0, 3.7, 5.5, 7.0,
+                                  12.9, 20.0, 33.6, 56.6}) {
+        NearerThan(off, radius, &fast, &scratch);
+        const cv::Mat naive = distance < radius;
+        EXPECT_EQ(cv::countNonZero(fast != naive), 0)
+            << size << " density " << density << " radius " << radius;
+      }
+    }
+  }
+}
+
 // The reference: every depth band worked on over the whole view (what BodyMask computes inside
 // each band's bounding box).
 cv::Mat NaiveBodyMask(const cv::Mat& disparity, const StereoGeometry& geometry,
@@ -163,6 +193,44 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnAwkwardSizesAndRegions) {
               << seeds_only << " (" << cv::countNonZero(naive) << " body pixels)";
         }
       }
+    }
+  }
+}
+
+TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnTheNeededPixels) {
+  const StereoGeometry g = testing::TestGeometry();
+  const cv::Size sizes[] = {{7, 300}, {257, 191}, {301, 203}};
+  std::uint64_t seed = 21;
+  for (const cv::Size size : sizes) {
+    const cv::Mat disparity = RandomScene(size, g, seed++);
+    const cv::Rect image(0, 0, size.width, size.height);
+    // The used pixels: a slanted strip (like a corridor along a line) and a corner block.
+    cv::Mat used(size, CV_8U, cv::Scalar(0));
+    cv::line(used, {0, size.height / 3}, {size.width, 2 * size.height / 3}, cv::Scalar(255), 9);
+    used(cv::Rect(0, 0, std::max(1, size.width / 5), std::max(1, size.height / 6))).setTo(255);
+    int calls = 0;
+    const BandRegion needed = [&](double d_from, double d_to) {
+      ++calls;
+      cv::Rect bounds;
+      for (int y = 0; y < size.height; ++y) {
+        for (int x = 0; x < size.width; ++x) {
+          const float d = disparity.at<float>(y, x);
+          if (used.at<std::uint8_t>(y, x) && IsValidDisparity(d) && d >= d_from && d <= d_to) {
+            bounds |= cv::Rect(x, y, 1, 1);
+          }
+        }
+      }
+      return bounds;
+    };
+    for (const double min_width_px : {0.0, 9.0}) {
+      ThinStructureOptions options;
+      options.min_width_px = min_width_px;
+      const cv::Mat fast = BodyMask(disparity, g, image, options, false, needed);
+      const cv::Mat naive = NaiveBodyMask(disparity, g, image, options, false);
+      EXPECT_GT(calls, 0);
+      EXPECT_EQ(cv::countNonZero((fast != naive) & used), 0)
+          << size << " min_width_px " << min_width_px << " (" << cv::countNonZero(naive & used)
+          << " body pixels used)";
     }
   }
 }
