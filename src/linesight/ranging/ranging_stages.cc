@@ -75,7 +75,10 @@ cv::Mat WithRejectedHolesFilled(const cv::Mat& view, const cv::Mat& obstacle) {
 
 }  // namespace
 
-double Quantile(std::vector<float> values, double p) {
+double Quantile(std::vector<float> values, double p) { return QuantileInPlace(&values, p); }
+
+double QuantileInPlace(std::vector<float>* reordered, double p) {
+  std::vector<float>& values = *reordered;
   LS_CHECK(!values.empty());
   const double position = p * double(values.size() - 1);
   const size_t lo = size_t(std::floor(position));
@@ -217,7 +220,7 @@ SmoothedObstacle SmoothObstacle(const cv::Mat& view, const cv::Mat& obstacle, in
         if (obstacle.at<uchar>(v, u)) window.push_back(view.at<float>(v, u));
       }
     }
-    return float(Median(window));
+    return float(QuantileInPlace(&window, 0.5));
   };
   for (int y = 0; y < view.rows; ++y) {
     for (int x = 0; x < view.cols; ++x) {

@@ -23,6 +23,8 @@ namespace linesight::detail {
 
 // Linearly interpolated quantile p in [0, 1] of `values` (not empty).
 double Quantile(std::vector<float> values, double p);
+// The same, reordering `values` in place instead of copying them.
+double QuantileInPlace(std::vector<float>* values, double p);
 double Median(std::vector<float> values);
 
 struct WorkingPixels {
