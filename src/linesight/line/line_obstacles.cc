@@ -43,8 +43,14 @@ cv::Mat Despeckle(const cv::Mat& disparity, const LineObstacleOptions& o) {
     const float* d = disparity.ptr<float>(y);
     std::int16_t* f = fixed.ptr<std::int16_t>(y);
     for (int x = 0; x < disparity.cols; ++x) {
-      f[x] = IsValidDisparity(d[x]) ? cv::saturate_cast<std::int16_t>(std::lround(d[x] * 16.0f))
-                                    : kInvalid;
+      if (!IsValidDisparity(d[x])) {
+        f[x] = kInvalid;
+        continue;
+      }
+      // std::lround (halves away from zero) of the clamped value, without the library call.
+      const double v = std::clamp(double(d[x]) * 16.0, -40000.0, 40000.0);
+      const auto rounded = v >= 0 ? std::int64_t(v + 0.5) : -std::int64_t(-v + 0.5);
+      f[x] = cv::saturate_cast<std::int16_t>(rounded);
     }
   }
   cv::filterSpeckles(fixed, kInvalid, o.speckle_window_px,
@@ -68,16 +74,14 @@ cv::Point3d BackProjectAt(const StereoGeometry& g, double u, double v, double z)
 
 std::vector<LinePoint> CorridorPoints(const cv::Mat& disparity, const cv::Mat& bodies,
                                       const StereoGeometry& g, const ConductorModel& model,
-                                      const LineObstacleOptions& o, int* body_pixels) {
+                                      const LineObstacleOptions& o) {
   std::vector<LinePoint> points;
-  *body_pixels = 0;
   const CurveLocator locator(model.line);
   for (int y = 0; y < disparity.rows; ++y) {
     const float* d = disparity.ptr<float>(y);
     const std::uint8_t* b = bodies.ptr<std::uint8_t>(y);
     for (int x = 0; x < disparity.cols; ++x) {
       if (b[x] == 0 || !IsValidDisparity(d[x]) || d[x] + g.disparity_offset_px <= 0) continue;
-      ++*body_pixels;
       const double z = g.DepthFromDisparity(d[x]);
       const LinePosition at = locator.Locate(BackProjectAt(g, x, y, z));
       if (std::fabs(at.side_m) > o.corridor_side_m || at.down_m < -o.corridor_above_m ||
@@ -89,6 +93,76 @@ std::vector<LinePoint> CorridorPoints(const cv::Mat& disparity, const cv::Mat& b
   }
   return points;
 }
+
+// Image bounds of the corridor's points at given depths, for the body test to work only there: the
+// corridor holds the points within `reach` of the axis between the arcs looked at (a point's
+// offset from its foot on the axis is its down and side offsets, more by a bend's along-axis part,
+// which the margin on `reach` covers).
+class CorridorBounds {
+ public:
+  CorridorBounds(const ConductorCurve& line, const StereoGeometry& g, const LineObstacleOptions& o)
+      : g_(g),
+        reach_(1.1 *
+                   std::hypot(o.corridor_side_m, std::max(o.corridor_above_m, o.corridor_below_m)) +
+               0.05) {
+    constexpr double kAxisStep = 0.1;  // m along the axis
+    for (double a = -0.5; a < o.max_arc_m + kAxisStep; a += kAxisStep)
+      axis_.push_back(AxisAt(line, a));
+  }
+
+  // Bounds of the corridor's pixels with disparities in [d_from, d_to] (disparity map
+  // coordinates; may reach beyond the image).
+  cv::Rect operator()(double d_from, double d_to) const {
+    const double z_near = g_.DepthFromDisparity(d_to) * (1 - 1e-6);
+    const double z_far = d_from + g_.disparity_offset_px > 0
+                             ? g_.DepthFromDisparity(d_from) * (1 + 1e-6)
+                             : std::numeric_limits<double>::infinity();
+    double u0 = std::numeric_limits<double>::infinity(), v0 = u0, u1 = -u0, v1 = -u0;
+    for (size_t i = 1; i < axis_.size(); ++i) {
+      const cv::Point3d& a = axis_[i - 1];
+      const cv::Point3d& b = axis_[i];
+      const double z_lo = std::max({z_near, std::min(a.z, b.z) - reach_, 1e-3});
+      const double z_hi = std::min(z_far, std::max(a.z, b.z) + reach_);
+      if (z_lo > z_hi) continue;
+      // Over a box with z > 0 the projection is extreme at its corners.
+      for (const double x : {std::min(a.x, b.x) - reach_, std::max(a.x, b.x) + reach_}) {
+        for (const double y : {std::min(a.y, b.y) - reach_, std::max(a.y, b.y) + reach_}) {
+          for (const double z : {z_lo, z_hi}) {
+            const double u = g_.focal_px * x / z + g_.cx, v = g_.focal_px * y / z + g_.cy;
+            u0 = std::min(u0, u);
+            u1 = std::max(u1, u);
+            v0 = std::min(v0, v);
+            v1 = std::max(v1, v);
+          }
+        }
+      }
+    }
+    if (!(u0 <= u1)) return {};
+    constexpr double kLimit = 1e6;  // px: far beyond any image
+    const int x0 = int(std::floor(std::max(u0, -kLimit))) - 2;
+    const int y0 = int(std::floor(std::max(v0, -kLimit))) - 2;
+    const int x1 = int(std::ceil(std::min(u1, kLimit))) + 3;
+    const int y1 = int(std::ceil(std::min(v1, kLimit))) + 3;
+    return {cv::Point(x0, y0), cv::Point(x1, y1)};
+  }
+
+ private:
+  // The axis at arc a: the polyline, extended straight beyond its ends (as CurveLocator does).
+  static cv::Point3d AxisAt(const ConductorCurve& line, double a) {
+    const std::vector<cv::Point3d>& p = line.points;
+    const std::vector<double>& s = line.arcs;
+    if (p.size() < 2) return p.empty() ? cv::Point3d() : p[0];
+    size_t i = size_t(std::upper_bound(s.begin(), s.end(), a) - s.begin());
+    i = std::clamp<size_t>(i, 1, p.size() - 1);
+    const double length = s[i] - s[i - 1];
+    if (length <= 1e-9) return p[i - 1];
+    return p[i - 1] + (a - s[i - 1]) / length * (p[i] - p[i - 1]);
+  }
+
+  const StereoGeometry& g_;
+  double reach_;
+  std::vector<cv::Point3d> axis_;
+};
 
 // Runs of points (sorted by arc) separated by gaps longer than cluster_gap_m.
 std::vector<std::vector<LinePoint>> SplitAlongLine(std::vector<LinePoint> points, double gap_m) {
@@ -557,10 +631,8 @@ nlohmann::json LineObstacle::ToJson() const {
 nlohmann::json LineObstacles::ToJson() const {
   nlohmann::json list = nlohmann::json::array();
   for (const LineObstacle& o : obstacles) list.push_back(o.ToJson());
-  return {{"conductor", conductor.ToJson()},
-          {"obstacles", list},
-          {"body_pixels", body_pixels},
-          {"corridor_pixels", corridor_pixels}};
+  return {
+      {"conductor", conductor.ToJson()}, {"obstacles", list}, {"corridor_pixels", corridor_pixels}};
 }
 
 LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFrame& frame,
@@ -589,12 +661,14 @@ LineObstacles FindLineObstacles(const RangingPipeline& pipeline, const RangingFr
   disparity.copyTo(despeckled, widening);
   ThinStructureOptions obstacle_thin = thin;
   obstacle_thin.depth_band_relative = options.body_depth_band;
+  // Only the corridor's pixels are looked at, so only they need the body test.
   const cv::Mat bodies = obstacle_thin.depth_band_relative == thin.depth_band_relative
                              ? conductor_bodies
-                             : BodyMask(disparity, g, image, obstacle_thin);
+                             : BodyMask(disparity, g, image, obstacle_thin, false,
+                                        CorridorBounds(result.conductor.line, g, options));
   const cv::Mat obstacle_bodies = bodies | widening;
-  std::vector<LinePoint> points = CorridorPoints(despeckled, obstacle_bodies, g, result.conductor,
-                                                 options, &result.body_pixels);
+  std::vector<LinePoint> points =
+      CorridorPoints(despeckled, obstacle_bodies, g, result.conductor, options);
   result.corridor_pixels = static_cast<int>(points.size());
   cv::Mat masked(disparity.size(), CV_32FC1, cv::Scalar(std::numeric_limits<float>::infinity()));
   for (const std::vector<LinePoint>& run :

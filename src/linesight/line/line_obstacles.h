@@ -136,9 +136,7 @@ struct LineObstacles {
   // The obstacles on the robot's conductor, nearest along the line first (empty unless the
   // conductor model is ok: without a line there is no "on the line").
   std::vector<LineObstacle> obstacles;
-  // Obstacle candidates in the working range (bodies and the widened band's pixels), and of
-  // them, those inside the corridor.
-  int body_pixels = 0;
+  // Obstacle candidates (bodies and the widened band's pixels) inside the corridor.
   int corridor_pixels = 0;
 
   nlohmann::json ToJson() const;
