@@ -9,6 +9,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/ranging/row_runs.h"
 
 namespace linesight {
 
@@ -47,6 +48,10 @@ void ThinStructureOptions::Check() const {
 
 namespace {
 
+// Distances saturate at 255, so a run's half-length is at most 254: elements of at most this many
+// rows and columns.
+constexpr size_t kMaxRuns = 509;
+
 // Up to this size OpenCV's own morphology (SIMD over the element's pixels) is the faster; both give
 // the same pixels.
 constexpr int kSmallEllipse = 11;
@@ -72,49 +77,74 @@ std::vector<int> EllipseRows(int n) {
   return rows;
 }
 
-// Dilation of `src` (0 / 255) by the row runs: out(y, x) is set when some row j of the element
-// has a pixel of row y + j - n / 2 of `src` within its half-width of x. Each row's horizontal
-// distance to its nearest set pixel is computed once; then each element row costs one compare a
-// pixel, instead of one per element pixel.
+// Dilation of `src` (0 / 255) by an element given as centred row runs (half-width of each row,
+// -1 for an empty row; the element is convex, so each of its columns is a centred run too):
+// out(y, x) is set when some column dx of the element has a set pixel of column x + dx of `src`
+// within its half-height of row y. Each pixel's vertical distance to the nearest set pixel of its
+// column is computed once (two passes down and up the image, a vector of pixels at a time); then
+// each element column costs one compare a pixel, instead of one per element pixel.
 void DilateRows(const cv::Mat& src, const std::vector<int>& rows, cv::Mat* out, EllipseScratch* s) {
-  // Distances saturate at 255: a run's half-width is at most 254 (n <= 509).
-  LS_CHECK(rows.size() <= 509);
+  LS_CHECK(rows.size() % 2 == 1 && rows.size() <= kMaxRuns);
   constexpr int kFar = 255;
-  // Rows are worked on in whole blocks of kBlock bytes (the padding is far from everything), so
-  // the compare-and-or below has no scalar tail: the crops worked on are often ~100 px wide.
+  const int half_height = int(rows.size()) / 2;
+  const int half_width = std::max(0, *std::max_element(rows.begin(), rows.end()));
+  // Half-height of each column dx = -half_width..half_width of the element.
+  std::vector<int> column(size_t(2 * half_width + 1), -1);
+  for (int j = 0; j < int(rows.size()); ++j) {
+    for (int dx = -rows[size_t(j)]; dx <= rows[size_t(j)]; ++dx) {
+      int& h = column[size_t(dx + half_width)];
+      h = std::max(h, std::abs(j - half_height));
+    }
+  }
+  for (int dx = -half_width; dx <= half_width; ++dx) {  // each column one centred run
+    const int h = column[size_t(dx + half_width)];
+    for (int dy = -half_height; dy <= half_height; ++dy) {
+      LS_CHECK((std::abs(dy) <= h) == (std::abs(dx) <= rows[size_t(dy + half_height)]));
+    }
+  }
+  // Rows are worked on in whole blocks of kBlock bytes and padded by half_width far pixels on
+  // both sides, so the kernel reads every shifted row without bounds checks or a scalar tail.
   constexpr int kBlock = 64;
   const int cols = src.cols, height = src.rows, wide = (cols + kBlock - 1) / kBlock * kBlock;
-  s->near.create(height, wide, CV_8U);
+  const int pad = half_width;
+  s->near.create(height, wide + 2 * pad, CV_8U);
   for (int y = 0; y < height; ++y) {
     const std::uint8_t* in = src.ptr<std::uint8_t>(y);
     std::uint8_t* d = s->near.ptr<std::uint8_t>(y);
-    int last = -kFar;
-    for (int x = 0; x < cols; ++x) {
-      if (in[x]) last = x;
-      d[x] = std::uint8_t(std::min(kFar, x - last));
-    }
-    last = std::numeric_limits<int>::max() / 2;
-    for (int x = cols - 1; x >= 0; --x) {
-      if (in[x]) last = x;
-      d[x] = std::uint8_t(std::min<int>(d[x], std::min(kFar, last - x)));
-    }
-    std::fill(d + cols, d + wide, std::uint8_t(kFar));
-  }
-  s->wide.create(height, wide, CV_8U);
-  const int half = int(rows.size()) / 2;
-  for (int y = 0; y < height; ++y) {
-    std::uint8_t* __restrict o = s->wide.ptr<std::uint8_t>(y);
-    std::fill(o, o + wide, std::uint8_t(0));
-    for (int j = 0; j < int(rows.size()); ++j) {
-      const int yy = y + j - half;
-      if (rows[size_t(j)] < 0 || yy < 0 || yy >= height) continue;
-      const std::uint8_t* __restrict d = s->near.ptr<std::uint8_t>(yy);
-      const std::uint8_t w = std::uint8_t(rows[size_t(j)]);
-      // One byte compare a pixel, unconditionally stored, which the compiler vectorises.
-      for (int x0 = 0; x0 < wide; x0 += kBlock) {
-        for (int x = x0; x < x0 + kBlock; ++x) o[x] = std::uint8_t(o[x] | (d[x] <= w ? 0xff : 0));
+    const std::uint8_t* above = y > 0 ? s->near.ptr<std::uint8_t>(y - 1) : nullptr;
+    std::fill(d, d + pad, std::uint8_t(kFar));
+    std::fill(d + pad + cols, d + wide + 2 * pad, std::uint8_t(kFar));
+    std::uint8_t* __restrict v = d + pad;
+    if (above == nullptr) {
+      for (int x = 0; x < cols; ++x) v[x] = in[x] ? 0 : kFar;
+    } else {
+      const std::uint8_t* __restrict a = above + pad;
+      for (int x = 0; x < cols; ++x) {
+        v[x] = in[x] ? 0 : std::uint8_t(std::min(int(a[x]) + 1, kFar));
       }
     }
+  }
+  for (int y = height - 2; y >= 0; --y) {
+    std::uint8_t* __restrict v = s->near.ptr<std::uint8_t>(y) + pad;
+    const std::uint8_t* __restrict b = s->near.ptr<std::uint8_t>(y + 1) + pad;
+    for (int x = 0; x < cols; ++x) {
+      v[x] = std::uint8_t(std::min(int(v[x]), std::min(int(b[x]) + 1, kFar)));
+    }
+  }
+  s->wide.create(height, wide, CV_8U);
+  std::vector<const std::uint8_t*> near(column.size());
+  std::vector<std::uint8_t> heights(column.size());
+  for (int y = 0; y < height; ++y) {
+    const std::uint8_t* row = s->near.ptr<std::uint8_t>(y) + pad;
+    int count = 0;
+    for (int dx = -half_width; dx <= half_width; ++dx) {
+      const int h = column[size_t(dx + half_width)];
+      if (h < 0) continue;
+      near[size_t(count)] = row + dx;
+      heights[size_t(count)] = std::uint8_t(h);
+      ++count;
+    }
+    detail::OrRowRuns(near.data(), heights.data(), count, wide, s->wide.ptr<std::uint8_t>(y));
   }
   s->wide.colRange(0, cols).copyTo(*out);
 }
@@ -173,12 +203,16 @@ void NearerThan(const cv::Mat& off, double radius, cv::Mat* out, EllipseScratch*
   size_t trim = 0;
   while (rows[trim] < 0 && rows[rows.size() - 1 - trim] < 0) ++trim;
   rows = std::vector<int>(rows.begin() + std::ptrdiff_t(trim), rows.end() - std::ptrdiff_t(trim));
+  if (rows.size() > kMaxRuns) {
+    // Beyond the runs' saturated distances: the distance transform itself.
+    cv::Mat clear, distance;
+    cv::compare(off, 0, clear, cv::CMP_EQ);
+    cv::distanceTransform(clear, distance, cv::DIST_L2, cv::DIST_MASK_5);
+    cv::compare(distance, radius, *out, cv::CMP_LT);
+    return;
+  }
   if (int(rows.size()) > kSmallEllipse) {
-    // A large ball costs a compare per row per pixel; the distance transform costs the same for
-    // any radius.
-    cv::compare(off, 0, scratch->complement, cv::CMP_EQ);
-    cv::distanceTransform(scratch->complement, scratch->distance, cv::DIST_L2, cv::DIST_MASK_5);
-    cv::compare(scratch->distance, radius, *out, cv::CMP_LT);
+    DilateRows(off, rows, out, scratch);
     return;
   }
   {

@@ -48,10 +48,10 @@ struct ThinStructureOptions {
 // Binary morphology (CV_8UC1, 0 / 255) with OpenCV's n x n MORPH_ELLIPSE element (n odd), the
 // same pixels as cv::dilate / cv::erode / cv::morphologyEx(MORPH_CLOSE) with it and their default
 // borders (thin_structures_test checks this on awkward sizes), at a cost that grows with n, not
-// n^2: the element is a stack of centred row runs, and a pixel is in a run's dilation when the
-// horizontal distance to the nearest set pixel of that row is at most the run's half-width.
+// n^2: the element is a row of centred column runs, and a pixel is in a run's dilation when the
+// vertical distance to the nearest set pixel of that column is at most the run's half-height.
 struct EllipseScratch {
-  cv::Mat near, wide, complement, dilated, distance;
+  cv::Mat near, wide, complement, dilated;
 };
 void DilateEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
 void ErodeEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scratch);
@@ -59,7 +59,7 @@ void CloseEllipse(const cv::Mat& src, int n, cv::Mat* out, EllipseScratch* scrat
 
 // Pixels nearer than `radius` to a set pixel of `off` (CV_8UC1, 0 / 255) in OpenCV's 5x5 chamfer
 // distance: exactly where cv::distanceTransform(complement of off, DIST_L2, DIST_MASK_5) is below
-// `radius` (outside the image counts as clear), as a dilation by the chamfer ball's row runs.
+// `radius` (outside the image counts as clear), as a dilation by the chamfer ball.
 void NearerThan(const cv::Mat& off, double radius, cv::Mat* out, EllipseScratch* scratch);
 
 // Returns (CV_8U, 255 = on a body) for `region` of the disparity; the pixels around `region` are
