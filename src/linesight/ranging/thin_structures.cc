@@ -298,8 +298,17 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
   };
   std::vector<Bounds> bounds(static_cast<size_t>(bands));
+  // The bands present in each kTile x kTile tile (a bit each): a band is worked on around the
+  // clusters of tiles that hold its surface, not over the box of all of them, where a few stray
+  // matches at its depth would make that box most of the image.
+  constexpr int kTile = 16;
+  const int tiles_x = (band_of.cols + kTile - 1) / kTile,
+            tiles_y = (band_of.rows + kTile - 1) / kTile;
+  const int words = (bands + 63) / 64;
+  std::vector<std::uint64_t> tile_bands(size_t(tiles_x) * size_t(tiles_y) * size_t(words));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
+    std::uint64_t* tile_row = tile_bands.data() + size_t(y / kTile) * size_t(tiles_x * words);
     for (int x = 0; x < band_of.cols; ++x) {
       if (b[x] < 0) continue;
       Bounds& k = bounds[size_t(b[x])];
@@ -307,8 +316,15 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       k.x1 = std::max(k.x1, x);
       k.y0 = std::min(k.y0, y);
       k.y1 = std::max(k.y1, y);
+      tile_row[size_t((x / kTile) * words + b[x] / 64)] |= std::uint64_t{1} << (b[x] % 64);
     }
   }
+  auto tile_holds = [&](int tx, int ty, int k) {
+    if (k < 0 || k >= bands) return false;
+    const size_t word =
+        (size_t(ty) * size_t(tiles_x) + size_t(tx)) * size_t(words) + size_t(k / 64);
+    return (tile_bands[word] >> (k % 64) & 1) != 0;
+  };
   std::vector<cv::Rect> box_of(static_cast<size_t>(bands));
   for (size_t k = 0; k < bounds.size(); ++k) {
     if (bounds[k].x1 >= 0) {
@@ -321,7 +337,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   const bool at_border =
       outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
   cv::Mat body(view.size(), CV_8U, cv::Scalar(0));
-  cv::Mat surface, padded, off, near_off, seeds, grown, in_band;
+  cv::Mat surface, padded, off, near_off, seeds, grown, in_band, marked, joined, labels;
   EllipseScratch scratch;
   for (int k = 0; k < bands; ++k) {
     if (box_of[size_t(k)].empty()) continue;
@@ -335,44 +351,77 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     // conductor.
     const int close = std::max(3, int(std::round(radius)) | 1);
     const int reach = close / 2 + 2;
-    cv::Rect crop = (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & whole;
+    cv::Rect limit = (box + cv::Size(2 * reach, 2 * reach) - cv::Point(reach, reach)) & whole;
+    // A pixel's result depends on the pixels within this margin: a body pixel grows from seeds
+    // within r, a seed needs the closed surface within its ball, and the closing needs the surface
+    // within twice its element's half-width.
+    const int m = 2 * r + 1 + 2 * (close / 2) + 2;
     if (needed) {
-      // Only the needed pixels of bands k - 1..k + 1 must come out right: a body pixel there grows
-      // from seeds within r, a seed needs the closed surface within its ball, and the closing
-      // needs the surface within twice its element's half-width.
+      // Only the needed pixels of bands k - 1..k + 1 must come out right.
       const double d_from =
           std::max(d_low, std::exp(depth_bands.log_low + (k - 1) * depth_bands.width) - offset);
       const double d_to =
           std::min(d_high, std::exp(depth_bands.log_low + (k + 2) * depth_bands.width) - offset);
       const cv::Rect need = needed(d_from, d_to) - outer.tl();
       if ((need & whole).empty()) continue;
-      const int m = 2 * r + 1 + 2 * (close / 2) + 2;
-      crop &= need + cv::Size(2 * m, 2 * m) - cv::Point(m, m);
-      if (crop.empty()) continue;
+      limit &= need + cv::Size(2 * m, 2 * m) - cv::Point(m, m);
+      if (limit.empty()) continue;
     }
-    cv::inRange(band_of(crop), k - 1, k + 1, surface);
-    CloseEllipse(surface, close, &surface, &scratch);
-    // Beyond the view's own edges the surface continues (replicated), as if the view went on. (A
-    // crop's other edges are off the surface, and so is the ring inside them.)
-    const bool crop_at_border =
-        at_border &&
-        (crop.x == 0 || crop.y == 0 || crop.br().x == whole.width || crop.br().y == whole.height);
-    const int pad = crop_at_border ? r + 1 : 0;
-    cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
-    // Seeds: pixels of the band with no pixel off the surface nearer than the radius.
-    cv::compare(padded, 0, off, cv::CMP_EQ);
-    NearerThan(off, radius, &near_off, &scratch);
-    cv::compare(band_of(crop), k, in_band, cv::CMP_EQ);
-    cv::bitwise_not(near_off(cv::Rect(pad, pad, crop.width, crop.height)), seeds);
-    seeds &= in_band;
-    if (cv::countNonZero(seeds) == 0) continue;
-    cv::Mat target = body(crop);
-    if (seeds_only) {
-      target |= seeds;
-      continue;
+    // Clusters of the tiles inside `limit` that hold the surface (bands k - 1..k + 1): tiles whose
+    // margins would overlap join one cluster. Each cluster's box comes out right when worked on
+    // with the margin around it; every surface pixel lies in some cluster's box.
+    marked.create(tiles_y, tiles_x, CV_8U);
+    marked.setTo(0);
+    for (int ty = limit.y / kTile; ty <= (limit.br().y - 1) / kTile; ++ty) {
+      for (int tx = limit.x / kTile; tx <= (limit.br().x - 1) / kTile; ++tx) {
+        if (tile_holds(tx, ty, k - 1) || tile_holds(tx, ty, k) || tile_holds(tx, ty, k + 1)) {
+          marked.at<std::uint8_t>(ty, tx) = 255;
+        }
+      }
     }
-    DilateEllipse(seeds, 2 * r + 1, &grown, &scratch);
-    target |= grown & surface;
+    std::vector<cv::Rect> clusters;
+    const int join = (m + kTile - 1) / kTile;
+    cv::dilate(marked, joined,
+               cv::getStructuringElement(cv::MORPH_RECT, {2 * join + 1, 2 * join + 1}));
+    const int count = cv::connectedComponents(joined, labels, 8, CV_32S);
+    clusters.resize(size_t(std::max(0, count - 1)));
+    for (int ty = 0; ty < tiles_y; ++ty) {
+      for (int tx = 0; tx < tiles_x; ++tx) {
+        if (marked.at<std::uint8_t>(ty, tx) == 0) continue;
+        clusters[size_t(labels.at<int>(ty, tx) - 1)] |=
+            cv::Rect(tx * kTile, ty * kTile, kTile, kTile);
+      }
+    }
+    for (const cv::Rect& tiles : clusters) {
+      const cv::Rect exact = tiles & limit;
+      if (exact.empty()) continue;
+      const cv::Rect crop = (exact + cv::Size(2 * m, 2 * m) - cv::Point(m, m)) & limit;
+      cv::inRange(band_of(crop), k - 1, k + 1, surface);
+      CloseEllipse(surface, close, &surface, &scratch);
+      // Beyond the view's own edges the surface continues (replicated), as if the view went on.
+      // (A crop's other edges are off the surface, and so is the ring inside them, or they are
+      // farther than the margin from `exact`.)
+      const bool crop_at_border =
+          at_border &&
+          (crop.x == 0 || crop.y == 0 || crop.br().x == whole.width || crop.br().y == whole.height);
+      const int pad = crop_at_border ? r + 1 : 0;
+      cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
+      // Seeds: pixels of the band with no pixel off the surface nearer than the radius.
+      cv::compare(padded, 0, off, cv::CMP_EQ);
+      NearerThan(off, radius, &near_off, &scratch);
+      cv::compare(band_of(crop), k, in_band, cv::CMP_EQ);
+      cv::bitwise_not(near_off(cv::Rect(pad, pad, crop.width, crop.height)), seeds);
+      seeds &= in_band;
+      if (cv::countNonZero(seeds) == 0) continue;
+      const cv::Rect inside = exact - crop.tl();
+      cv::Mat target = body(exact);
+      if (seeds_only) {
+        target |= seeds(inside);
+        continue;
+      }
+      DilateEllipse(seeds, 2 * r + 1, &grown, &scratch);
+      target |= grown(inside) & surface(inside);
+    }
   }
   return body(cv::Rect(region.x - outer.x, region.y - outer.y, region.width, region.height))
       .clone();

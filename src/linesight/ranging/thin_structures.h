@@ -69,8 +69,12 @@ void NearerThan(const cv::Mat& off, double radius, cv::Mat* out, EllipseScratch*
 //
 // With `needed`, only some pixels must come out right: needed(d_from, d_to) bounds (in disparity
 // map coordinates) the pixels with disparities in [d_from, d_to] whose result is used (an empty
-// rectangle: none). Pixels outside those bounds may be left off; the ones inside are the same as
-// without `needed`, at a cost that shrinks with the bounds.
+// rectangle: none). The pixels inside those bounds are the same as without `needed`; the ones
+// outside may differ. The cost shrinks with the bounds.
+//
+// Cost: each depth band is worked on around the clusters of 16 x 16 tiles that hold its surface,
+// each with the margin its result depends on, so stray matches scattered over the image at some
+// depth cost little.
 using BandRegion = std::function<cv::Rect(double d_from, double d_to)>;
 cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const cv::Rect& region,
                  const ThinStructureOptions& options, bool seeds_only = false,

@@ -203,6 +203,36 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnAwkwardSizesAndRegions) {
   }
 }
 
+// Bodies at a few depths and stray matches at every depth scattered over the view (what makes a
+// depth band's bounding box most of the image): the clusters of a band's tiles are worked on
+// apart, some near each other and near the bodies.
+TEST(BodyMaskTest, EqualsTheWholeViewReferenceWithStrayMatches) {
+  const StereoGeometry g = testing::TestGeometry();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const cv::Size size : {cv::Size(317, 241), cv::Size(160, 400)}) {
+    cv::Mat disparity = RandomScene(size, g, 77);
+    for (int i = 0; i < 900; ++i) {
+      const int x = int(unit(rng) * size.width), y = int(unit(rng) * size.height);
+      const int w = 1 + int(unit(rng) * 4), h = 1 + int(unit(rng) * 4);
+      const cv::Rect r = cv::Rect(x, y, w, h) & cv::Rect(0, 0, size.width, size.height);
+      disparity(r).setTo(g.DisparityFromDepth(0.3 + 9.0 * unit(rng)));
+    }
+    for (const double min_width_px : {0.0, 9.0}) {
+      ThinStructureOptions options;
+      options.min_width_px = min_width_px;
+      for (const bool seeds_only : {false, true}) {
+        const cv::Rect image(0, 0, size.width, size.height);
+        const cv::Mat fast = BodyMask(disparity, g, image, options, seeds_only);
+        const cv::Mat naive = NaiveBodyMask(disparity, g, image, options, seeds_only);
+        EXPECT_EQ(cv::countNonZero(fast != naive), 0)
+            << size << " min_width_px " << min_width_px << " seeds_only " << seeds_only << " ("
+            << cv::countNonZero(naive) << " body pixels)";
+      }
+    }
+  }
+}
+
 TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnTheNeededPixels) {
   const StereoGeometry g = testing::TestGeometry();
   const cv::Size sizes[] = {{7, 300}, {257, 191}, {301, 203}};
