@@ -306,11 +306,16 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
             tiles_y = (band_of.rows + kTile - 1) / kTile;
   const int words = (bands + 63) / 64;
   std::vector<std::uint64_t> tile_bands(size_t(tiles_x) * size_t(tiles_y) * size_t(words));
+  // Band 0's surface (bands -1..1 in the loop below) holds the pixels without a band too.
+  std::vector<std::uint8_t> tile_unbanded(size_t(tiles_x) * size_t(tiles_y));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
     std::uint64_t* tile_row = tile_bands.data() + size_t(y / kTile) * size_t(tiles_x * words);
     for (int x = 0; x < band_of.cols; ++x) {
-      if (b[x] < 0) continue;
+      if (b[x] < 0) {
+        tile_unbanded[size_t(y / kTile) * size_t(tiles_x) + size_t(x / kTile)] = 1;
+        continue;
+      }
       Bounds& k = bounds[size_t(b[x])];
       k.x0 = std::min(k.x0, x);
       k.x1 = std::max(k.x1, x);
@@ -320,6 +325,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     }
   }
   auto tile_holds = [&](int tx, int ty, int k) {
+    if (k == -1) return tile_unbanded[size_t(ty) * size_t(tiles_x) + size_t(tx)] != 0;
     if (k < 0 || k >= bands) return false;
     const size_t word =
         (size_t(ty) * size_t(tiles_x) + size_t(tx)) * size_t(words) + size_t(k / 64);
@@ -393,7 +399,10 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       }
     }
     for (const cv::Rect& tiles : clusters) {
-      const cv::Rect exact = tiles & limit;
+      // The closing adds pixels up to its half-width away from the surface, so the cluster's
+      // results reach that far beyond its tiles.
+      const int grow = close / 2;
+      const cv::Rect exact = (tiles + cv::Size(2 * grow, 2 * grow) - cv::Point(grow, grow)) & limit;
       if (exact.empty()) continue;
       const cv::Rect crop = (exact + cv::Size(2 * m, 2 * m) - cv::Point(m, m)) & limit;
       cv::inRange(band_of(crop), k - 1, k + 1, surface);

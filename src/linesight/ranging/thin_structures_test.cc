@@ -216,7 +216,10 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceWithStrayMatches) {
       const int x = int(unit(rng) * size.width), y = int(unit(rng) * size.height);
       const int w = 1 + int(unit(rng) * 4), h = 1 + int(unit(rng) * 4);
       const cv::Rect r = cv::Rect(x, y, w, h) & cv::Rect(0, 0, size.width, size.height);
-      disparity(r).setTo(g.DisparityFromDepth(0.3 + 9.0 * unit(rng)));
+      // A third of them at the far end of the range: band 0, whose surface (bands -1..1 in the
+      // naive loop) holds the pixels without a band too.
+      const double z = i % 3 == 0 ? 7.4 + 0.6 * unit(rng) : 0.3 + 9.0 * unit(rng);
+      disparity(r).setTo(g.DisparityFromDepth(z));
     }
     for (const double min_width_px : {0.0, 9.0}) {
       ThinStructureOptions options;
@@ -229,6 +232,27 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceWithStrayMatches) {
             << size << " min_width_px " << min_width_px << " seeds_only " << seeds_only << " ("
             << cv::countNonZero(naive) << " body pixels)";
       }
+    }
+  }
+}
+
+// The farthest band's surface holds the pixels without a band (the loop's band k - 1 = -1), so
+// a body there reaches into the invalid pixels around it, across tiles that hold no band.
+TEST(BodyMaskTest, EqualsTheWholeViewReferenceAtTheFarEndAmongInvalidPixels) {
+  const StereoGeometry g = testing::TestGeometry();
+  ThinStructureOptions options;
+  const DepthBands bands(g, options.min_depth_m, options.max_depth_m, options.depth_band_relative);
+  for (const int x0 : {13, 14, 15, 30, 31}) {
+    cv::Mat disparity(cv::Size(97, 61), CV_32F, cv::Scalar(kInvalidDisparity));
+    disparity(cv::Rect(x0, 20, 2, 2)).setTo(bands.CentreDisparity(0));
+    const cv::Rect image(0, 0, disparity.cols, disparity.rows);
+    for (const bool seeds_only : {false, true}) {
+      const cv::Mat fast = BodyMask(disparity, g, image, options, seeds_only);
+      const cv::Mat naive = NaiveBodyMask(disparity, g, image, options, seeds_only);
+      EXPECT_GT(cv::countNonZero(naive), 0);
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0)
+          << "x0 " << x0 << " seeds_only " << seeds_only << " (" << cv::countNonZero(naive)
+          << " body pixels)";
     }
   }
 }
