@@ -9,6 +9,7 @@
 
 #include "linesight/core/error.h"
 #include "linesight/line/line_test_util.h"
+#include "linesight/ranging/thin_structures_reference.h"
 #include "linesight/sim/power_line_sequence.h"
 
 namespace linesight {
@@ -339,6 +340,33 @@ TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
   LineObstacleOptions bad_area;
   bad_area.min_area_m2 = -1e-4;
   EXPECT_THROW(FindLineObstacles(pipeline, frame, bad_area), OptionError);
+}
+
+// The body test's fast path (crops, tile clusters, run morphology) on the line stages' own inputs:
+// rendered frames whose stray matches, far-end pixels among invalid ones and closings at tile
+// boundaries exercise what random scenes rarely do. Both depth-band widths the stages use.
+TEST(BodyMaskOnRenderedFramesTest, EqualsTheWholeViewReference) {
+  for (const auto& [seed, index] : {std::pair{201, 80}, std::pair{202, 40}}) {
+    const sim::PowerLineScene scene =
+        sim::PowerLineSequence(testing::FastSequence(seed)).Render(index);
+    RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());
+    const cv::Mat disparity = pipeline.Process(scene.left, scene.right).disparity;
+    const cv::Rect image(0, 0, disparity.cols, disparity.rows);
+    const LineObstacleOptions line;
+    for (const double band : {0.04, line.body_depth_band}) {
+      ThinStructureOptions thin;
+      thin.min_width_m = line.conductor.max_conductor_width_m;
+      thin.min_depth_m = line.conductor.min_depth_m;
+      thin.max_depth_m = line.conductor.max_depth_m;
+      thin.depth_band_relative = band;
+      const cv::Mat fast = BodyMask(disparity, pipeline.geometry(), image, thin);
+      const cv::Mat naive =
+          testing::NaiveBodyMask(disparity, pipeline.geometry(), image, thin, false);
+      EXPECT_GT(cv::countNonZero(naive), 1000);
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0)
+          << "seed " << seed << " frame " << index << " bands " << band;
+    }
+  }
 }
 
 }  // namespace

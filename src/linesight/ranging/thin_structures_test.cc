@@ -9,6 +9,7 @@
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 #include "linesight/ranging/ranging_test_util.h"
+#include "linesight/ranging/thin_structures_reference.h"
 
 // The morphology's SIMD kernel (row_runs.h) runs on every Highway target this CPU supports (outside
 // namespace linesight, whose `testing` would hide gtest's in the macro).
@@ -96,62 +97,6 @@ TEST_P(MorphologyKernelTest, NearerThanEqualsOpenCvsDistanceTransformOnAwkwardSi
   }
 }
 
-// The reference: every depth band worked on over the whole view (what BodyMask computes inside
-// each band's bounding box).
-cv::Mat NaiveBodyMask(const cv::Mat& disparity, const StereoGeometry& geometry,
-                      const cv::Rect& region, const ThinStructureOptions& options,
-                      bool seeds_only) {
-  const cv::Rect image(0, 0, disparity.cols, disparity.rows);
-  const DepthBands bands(geometry, options.min_depth_m, options.max_depth_m,
-                         options.depth_band_relative);
-  auto radius_of_band = [&](int k) {
-    const double d = bands.CentreDisparity(k);
-    return 0.5 * std::max(options.min_width_px,
-                          options.min_width_m * geometry.focal_px / geometry.DepthFromDisparity(d));
-  };
-  double max_radius = 0.0;
-  for (int y = region.y; y < region.br().y; ++y) {
-    for (int x = region.x; x < region.br().x; ++x) {
-      const float d = disparity.at<float>(y, x);
-      if (IsValidDisparity(d) && d >= bands.d_low && d <= bands.d_high) {
-        max_radius = std::max(max_radius, 0.5 * std::max(options.min_width_px,
-                                                         options.min_width_m * (d + bands.offset) /
-                                                             geometry.baseline_m));
-      }
-    }
-  }
-  const int margin = int(std::ceil(max_radius)) + 2;
-  const cv::Rect outer =
-      (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
-  const cv::Mat band_of = bands.Map(disparity(outer));
-  const bool at_border =
-      outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
-  cv::Mat body(band_of.size(), CV_8U, cv::Scalar(0));
-  for (int k = 0; k < bands.count; ++k) {
-    if (cv::countNonZero(band_of == k) == 0) continue;  // no seeds
-    cv::Mat surface, padded, distance, grown;
-    cv::inRange(band_of, k - 1, k + 1, surface);
-    const int close = std::max(3, int(std::round(radius_of_band(k))) | 1);
-    cv::morphologyEx(surface, surface, cv::MORPH_CLOSE,
-                     cv::getStructuringElement(cv::MORPH_ELLIPSE, {close, close}));
-    const int pad = at_border ? int(std::ceil(radius_of_band(k))) + 1 : 0;
-    cv::copyMakeBorder(surface, padded, pad, pad, pad, pad, cv::BORDER_REPLICATE);
-    cv::distanceTransform(padded, distance, cv::DIST_L2, cv::DIST_MASK_5);
-    const double radius = radius_of_band(k);
-    const cv::Mat seeds =
-        (distance(cv::Rect(pad, pad, band_of.cols, band_of.rows)) >= radius) & (band_of == k);
-    if (seeds_only) {
-      body |= seeds;
-      continue;
-    }
-    const int r = int(std::ceil(radius));
-    cv::dilate(seeds, grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
-    body |= grown & surface;
-  }
-  return body(cv::Rect(region.x - outer.x, region.y - outer.y, region.width, region.height))
-      .clone();
-}
-
 // Random blocks, bars and thin lines at random depths, with holes, touching the image borders.
 cv::Mat RandomScene(cv::Size size, const StereoGeometry& g, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -192,7 +137,7 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnAwkwardSizesAndRegions) {
         options.min_width_px = min_width_px;
         for (const bool seeds_only : {false, true}) {
           const cv::Mat fast = BodyMask(disparity, g, region, options, seeds_only);
-          const cv::Mat naive = NaiveBodyMask(disparity, g, region, options, seeds_only);
+          const cv::Mat naive = testing::NaiveBodyMask(disparity, g, region, options, seeds_only);
           ASSERT_EQ(fast.size(), naive.size());
           EXPECT_EQ(cv::countNonZero(fast != naive), 0)
               << size << " region " << region << " min_width_px " << min_width_px << " seeds_only "
@@ -227,7 +172,7 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceWithStrayMatches) {
       for (const bool seeds_only : {false, true}) {
         const cv::Rect image(0, 0, size.width, size.height);
         const cv::Mat fast = BodyMask(disparity, g, image, options, seeds_only);
-        const cv::Mat naive = NaiveBodyMask(disparity, g, image, options, seeds_only);
+        const cv::Mat naive = testing::NaiveBodyMask(disparity, g, image, options, seeds_only);
         EXPECT_EQ(cv::countNonZero(fast != naive), 0)
             << size << " min_width_px " << min_width_px << " seeds_only " << seeds_only << " ("
             << cv::countNonZero(naive) << " body pixels)";
@@ -236,23 +181,25 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceWithStrayMatches) {
   }
 }
 
-// The farthest band's surface holds the pixels without a band (the loop's band k - 1 = -1), so
-// a body there reaches into the invalid pixels around it, across tiles that hold no band.
-TEST(BodyMaskTest, EqualsTheWholeViewReferenceAtTheFarEndAmongInvalidPixels) {
+// At the far end of the range, among pixels without a disparity: those are no band's surface, so
+// a speck there is thin and a block is a body, wherever the tiles' boundaries fall.
+TEST(BodyMaskTest, AtTheFarEndPixelsWithoutADisparityAreNoSurface) {
   const StereoGeometry g = testing::TestGeometry();
   ThinStructureOptions options;
   const DepthBands bands(g, options.min_depth_m, options.max_depth_m, options.depth_band_relative);
   for (const int x0 : {13, 14, 15, 30, 31}) {
     cv::Mat disparity(cv::Size(97, 61), CV_32F, cv::Scalar(kInvalidDisparity));
     disparity(cv::Rect(x0, 20, 2, 2)).setTo(bands.CentreDisparity(0));
+    disparity(cv::Rect(x0 + 40, 25, 20, 20)).setTo(bands.CentreDisparity(0));
     const cv::Rect image(0, 0, disparity.cols, disparity.rows);
     for (const bool seeds_only : {false, true}) {
       const cv::Mat fast = BodyMask(disparity, g, image, options, seeds_only);
-      const cv::Mat naive = NaiveBodyMask(disparity, g, image, options, seeds_only);
-      EXPECT_GT(cv::countNonZero(naive), 0);
-      EXPECT_EQ(cv::countNonZero(fast != naive), 0)
-          << "x0 " << x0 << " seeds_only " << seeds_only << " (" << cv::countNonZero(naive)
-          << " body pixels)";
+      const cv::Mat naive = testing::NaiveBodyMask(disparity, g, image, options, seeds_only);
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0) << "x0 " << x0 << " seeds_only " << seeds_only;
+      EXPECT_EQ(cv::countNonZero(fast(cv::Rect(0, 0, x0 + 30, 61))), 0) << "the speck, x0 " << x0;
+      EXPECT_GT(cv::countNonZero(fast(cv::Rect(x0 + 40, 25, 20, 20))), 0) << "the block, x0 " << x0;
+      EXPECT_EQ(cv::countNonZero(fast) - cv::countNonZero(fast(cv::Rect(x0 + 40, 25, 20, 20))), 0)
+          << "nothing but the block, x0 " << x0;
     }
   }
 }
@@ -286,7 +233,7 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceOnTheNeededPixels) {
       ThinStructureOptions options;
       options.min_width_px = min_width_px;
       const cv::Mat fast = BodyMask(disparity, g, image, options, false, needed);
-      const cv::Mat naive = NaiveBodyMask(disparity, g, image, options, false);
+      const cv::Mat naive = testing::NaiveBodyMask(disparity, g, image, options, false);
       EXPECT_GT(calls, 0);
       EXPECT_EQ(cv::countNonZero((fast != naive) & used), 0)
           << size << " min_width_px " << min_width_px << " (" << cv::countNonZero(naive & used)
