@@ -306,11 +306,17 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
             tiles_y = (band_of.rows + kTile - 1) / kTile;
   const int words = (bands + 63) / 64;
   std::vector<std::uint64_t> tile_bands(size_t(tiles_x) * size_t(tiles_y) * size_t(words));
+  // Band 0's surface (bands -1..1 in the loop below) holds the pixels without a band too: beyond
+  // the far end of the range, or without a disparity.
+  std::vector<std::uint8_t> tile_unbanded(size_t(tiles_x) * size_t(tiles_y));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
     std::uint64_t* tile_row = tile_bands.data() + size_t(y / kTile) * size_t(tiles_x * words);
     for (int x = 0; x < band_of.cols; ++x) {
-      if (b[x] < 0) continue;
+      if (b[x] < 0) {
+        tile_unbanded[size_t(y / kTile) * size_t(tiles_x) + size_t(x / kTile)] = 1;
+        continue;
+      }
       Bounds& k = bounds[size_t(b[x])];
       k.x0 = std::min(k.x0, x);
       k.x1 = std::max(k.x1, x);
@@ -320,6 +326,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
     }
   }
   auto tile_holds = [&](int tx, int ty, int k) {
+    if (k == -1) return tile_unbanded[size_t(ty) * size_t(tiles_x) + size_t(tx)] != 0;
     if (k < 0 || k >= bands) return false;
     const size_t word =
         (size_t(ty) * size_t(tiles_x) + size_t(tx)) * size_t(words) + size_t(k / 64);
@@ -399,8 +406,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
       const cv::Rect exact = (tiles + cv::Size(2 * grow, 2 * grow) - cv::Point(grow, grow)) & limit;
       if (exact.empty()) continue;
       const cv::Rect crop = (exact + cv::Size(2 * m, 2 * m) - cv::Point(m, m)) & limit;
-      // (Pixels without a band, -1, are no band's surface.)
-      cv::inRange(band_of(crop), std::max(0, k - 1), k + 1, surface);
+      cv::inRange(band_of(crop), k - 1, k + 1, surface);
       CloseEllipse(surface, close, &surface, &scratch);
       // Beyond the view's own edges the surface continues (replicated), as if the view went on.
       // (A crop's other edges are off the surface, and so is the ring inside them, or they are

@@ -44,7 +44,7 @@ inline cv::Mat NaiveBodyMask(const cv::Mat& disparity, const StereoGeometry& geo
   for (int k = 0; k < bands.count; ++k) {
     if (cv::countNonZero(band_of == k) == 0) continue;  // no seeds
     cv::Mat surface, padded, distance, grown;
-    cv::inRange(band_of, std::max(0, k - 1), k + 1, surface);
+    cv::inRange(band_of, k - 1, k + 1, surface);
     const int close = std::max(3, int(std::round(radius_of_band(k))) | 1);
     cv::morphologyEx(surface, surface, cv::MORPH_CLOSE,
                      cv::getStructuringElement(cv::MORPH_ELLIPSE, {close, close}));
