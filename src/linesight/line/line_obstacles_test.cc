@@ -343,13 +343,10 @@ TEST(LineObstaclesTest, NothingIsOnALineThatIsNotFound) {
 }
 
 // The body test's fast path (crops, tile clusters, run morphology) on the line stages' own inputs:
-// rendered frames whose stray matches, far-end pixels among invalid ones and closings at tile
-// boundaries exercise what random scenes rarely do. Both depth-band widths the stages use. (Not
-// every frame: band 0's surface holds the pixels without a band, which the fast path takes only
-// within its crops' reach of band 0's own pixels and the reference everywhere; on seed 202, frame
-// 40 that differs in 7 pixels at the top edge.)
+// rendered frames whose stray matches, far-end pixels beside the sky and closings at tile
+// boundaries exercise what random scenes rarely do. Both depth-band widths the stages use.
 TEST(BodyMaskOnRenderedFramesTest, EqualsTheWholeViewReference) {
-  for (const auto& [seed, index] : {std::pair{201, 80}, std::pair{201, 160}}) {
+  for (const auto& [seed, index] : {std::pair{201, 80}, std::pair{202, 40}}) {
     const sim::PowerLineScene scene =
         sim::PowerLineSequence(testing::FastSequence(seed)).Render(index);
     RangingPipeline pipeline(scene.calibration, testing::LineChainOnOneThread());

@@ -196,6 +196,18 @@ std::vector<int> ChamferBallRows(double radius) {
 
 }  // namespace
 
+cv::Mat SurfaceBands(const DepthBands& bands, const cv::Mat& disparity) {
+  cv::Mat band_of = bands.Map(disparity);
+  for (int y = 0; y < disparity.rows; ++y) {
+    const float* d = disparity.ptr<float>(y);
+    int* b = band_of.ptr<int>(y);
+    for (int x = 0; x < disparity.cols; ++x) {
+      if (b[x] < 0 && !(IsValidDisparity(d[x]) && d[x] < bands.d_low)) b[x] = kNoSurface;
+    }
+  }
+  return band_of;
+}
+
 void NearerThan(const cv::Mat& off, double radius, cv::Mat* out, EllipseScratch* scratch) {
   LS_CHECK(off.type() == CV_8UC1 && radius > 0.0);
   std::vector<int> rows = ChamferBallRows(radius);
@@ -287,7 +299,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   const cv::Rect outer =
       (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
   const cv::Mat view = disparity(outer);
-  const cv::Mat band_of = depth_bands.Map(view);
+  const cv::Mat band_of = SurfaceBands(depth_bands, view);
   // Each band's bounding box: each band is worked on inside the box of its surface plus a margin,
   // not on the whole view, with the same result pixel for pixel (the reference test checks this).
   // The closing adds pixels only within its disc's radius of the surface, so a margin of that
@@ -297,7 +309,8 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   struct Bounds {
     int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
   };
-  std::vector<Bounds> bounds(static_cast<size_t>(bands));
+  // Bands -1..bands - 1 (-1: beyond the far end, part of band 0's surface), offset by one.
+  std::vector<Bounds> bounds(static_cast<size_t>(bands + 1));
   // The bands present in each kTile x kTile tile (a bit each): a band is worked on around the
   // clusters of tiles that hold its surface, not over the box of all of them, where a few stray
   // matches at its depth would make that box most of the image.
@@ -306,22 +319,22 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
             tiles_y = (band_of.rows + kTile - 1) / kTile;
   const int words = (bands + 63) / 64;
   std::vector<std::uint64_t> tile_bands(size_t(tiles_x) * size_t(tiles_y) * size_t(words));
-  // Band 0's surface (bands -1..1 in the loop below) holds the pixels without a band too: beyond
-  // the far end of the range, or without a disparity.
+  // Band 0's surface (bands -1..1 in the loop below) holds the pixels beyond the far end too.
   std::vector<std::uint8_t> tile_unbanded(size_t(tiles_x) * size_t(tiles_y));
   for (int y = 0; y < band_of.rows; ++y) {
     const int* b = band_of.ptr<int>(y);
     std::uint64_t* tile_row = tile_bands.data() + size_t(y / kTile) * size_t(tiles_x * words);
     for (int x = 0; x < band_of.cols; ++x) {
-      if (b[x] < 0) {
-        tile_unbanded[size_t(y / kTile) * size_t(tiles_x) + size_t(x / kTile)] = 1;
-        continue;
-      }
-      Bounds& k = bounds[size_t(b[x])];
+      if (b[x] == kNoSurface) continue;
+      Bounds& k = bounds[size_t(b[x] + 1)];
       k.x0 = std::min(k.x0, x);
       k.x1 = std::max(k.x1, x);
       k.y0 = std::min(k.y0, y);
       k.y1 = std::max(k.y1, y);
+      if (b[x] < 0) {
+        tile_unbanded[size_t(y / kTile) * size_t(tiles_x) + size_t(x / kTile)] = 1;
+        continue;
+      }
       tile_row[size_t((x / kTile) * words + b[x] / 64)] |= std::uint64_t{1} << (b[x] % 64);
     }
   }
@@ -332,7 +345,7 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
         (size_t(ty) * size_t(tiles_x) + size_t(tx)) * size_t(words) + size_t(k / 64);
     return (tile_bands[word] >> (k % 64) & 1) != 0;
   };
-  std::vector<cv::Rect> box_of(static_cast<size_t>(bands));
+  std::vector<cv::Rect> box_of(bounds.size());  // band k's at k + 1
   for (size_t k = 0; k < bounds.size(); ++k) {
     if (bounds[k].x1 >= 0) {
       box_of[k] = cv::Rect(cv::Point(bounds[k].x0, bounds[k].y0),
@@ -347,10 +360,9 @@ cv::Mat BodyMask(const cv::Mat& disparity, const StereoGeometry& geometry, const
   cv::Mat surface, padded, off, near_off, seeds, grown, in_band, marked, joined, labels;
   EllipseScratch scratch;
   for (int k = 0; k < bands; ++k) {
-    if (box_of[size_t(k)].empty()) continue;
-    cv::Rect box = box_of[size_t(k)];
-    if (k > 0) box |= box_of[size_t(k - 1)];
-    if (k + 1 < bands) box |= box_of[size_t(k + 1)];
+    if (box_of[size_t(k + 1)].empty()) continue;
+    cv::Rect box = box_of[size_t(k + 1)] | box_of[size_t(k)];
+    if (k + 1 < bands) box |= box_of[size_t(k + 2)];
     const double radius = radius_of_band(k);
     const int r = int(std::ceil(radius));
     // Matching leaves small holes inside bodies; a hole must not make a body look thin. Closing

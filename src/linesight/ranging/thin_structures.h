@@ -32,6 +32,14 @@ struct DepthBands {
   cv::Mat Map(const cv::Mat& disparity) const;
 };
 
+// The bands of the body test's surfaces: DepthBands::Map, with the pixels beyond the far end of
+// the range (valid disparities below d_low) left at -1, which the farthest band's surface (bands
+// -1..1) takes in, and the pixels without a disparity or nearer than the range at kNoSurface,
+// which no band's does. The far background continues past the range's end, so where it crosses
+// it, it stays a wide surface; the sky beside a far conductor is no surface at all.
+constexpr int kNoSurface = -2;
+cv::Mat SurfaceBands(const DepthBands& bands, const cv::Mat& disparity);
+
 struct ThinStructureOptions {
   double min_width_m = 0.045;  // narrower surfaces are thin (m)
   // ... or narrower than this many pixels (0 = off): a matcher widens a thin structure by about

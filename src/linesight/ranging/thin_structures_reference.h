@@ -37,7 +37,7 @@ inline cv::Mat NaiveBodyMask(const cv::Mat& disparity, const StereoGeometry& geo
   const int margin = int(std::ceil(max_radius)) + 2;
   const cv::Rect outer =
       (region + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) & image;
-  const cv::Mat band_of = bands.Map(disparity(outer));
+  const cv::Mat band_of = SurfaceBands(bands, disparity(outer));
   const bool at_border =
       outer.x == 0 || outer.y == 0 || outer.br().x == image.width || outer.br().y == image.height;
   cv::Mat body(band_of.size(), CV_8U, cv::Scalar(0));

@@ -181,23 +181,29 @@ TEST(BodyMaskTest, EqualsTheWholeViewReferenceWithStrayMatches) {
   }
 }
 
-// The farthest band's surface holds the pixels without a band (the loop's band k - 1 = -1), so
-// a body there reaches into the invalid pixels around it, across tiles that hold no band.
-TEST(BodyMaskTest, EqualsTheWholeViewReferenceAtTheFarEndAmongInvalidPixels) {
+// At the far end of the range: pixels without a disparity are no surface, so a speck among them
+// is thin and a block a body; the valid pixels beyond the range are the farthest band's surface,
+// so a speck on them is a body (the background continues there). Wherever the tiles' boundaries
+// fall.
+TEST(BodyMaskTest, AtTheFarEndOnlyTheBackgroundBeyondTheRangeIsSurface) {
   const StereoGeometry g = testing::TestGeometry();
   ThinStructureOptions options;
   const DepthBands bands(g, options.min_depth_m, options.max_depth_m, options.depth_band_relative);
   for (const int x0 : {13, 14, 15, 30, 31}) {
-    cv::Mat disparity(cv::Size(97, 61), CV_32F, cv::Scalar(kInvalidDisparity));
-    disparity(cv::Rect(x0, 20, 2, 2)).setTo(bands.CentreDisparity(0));
+    cv::Mat disparity(cv::Size(97, 91), CV_32F, cv::Scalar(kInvalidDisparity));
+    disparity(cv::Rect(0, 60, 97, 31)).setTo(0.5 * bands.d_low);  // beyond the range
+    const cv::Rect speck(x0, 20, 2, 2), block(x0 + 40, 25, 20, 20), on_beyond(x0, 70, 2, 2);
+    disparity(speck).setTo(bands.CentreDisparity(0));
+    disparity(block).setTo(bands.CentreDisparity(0));
+    disparity(on_beyond).setTo(bands.CentreDisparity(0));
     const cv::Rect image(0, 0, disparity.cols, disparity.rows);
     for (const bool seeds_only : {false, true}) {
       const cv::Mat fast = BodyMask(disparity, g, image, options, seeds_only);
       const cv::Mat naive = testing::NaiveBodyMask(disparity, g, image, options, seeds_only);
-      EXPECT_GT(cv::countNonZero(naive), 0);
-      EXPECT_EQ(cv::countNonZero(fast != naive), 0)
-          << "x0 " << x0 << " seeds_only " << seeds_only << " (" << cv::countNonZero(naive)
-          << " body pixels)";
+      EXPECT_EQ(cv::countNonZero(fast != naive), 0) << "x0 " << x0 << " seeds_only " << seeds_only;
+      EXPECT_EQ(cv::countNonZero(fast(speck)), 0) << "x0 " << x0;
+      EXPECT_GT(cv::countNonZero(fast(block)), 0) << "x0 " << x0;
+      EXPECT_GT(cv::countNonZero(fast(on_beyond)), 0) << "x0 " << x0;
     }
   }
 }
