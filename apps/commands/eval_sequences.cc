@@ -64,6 +64,9 @@ int RunEvalSequences(int argc, char** argv) {
   AddRangingSettingsOption(app, &ranging_settings);
   app.add_option("--threads", options.pipeline.threads, "matcher threads (0 = all cores)")
       ->capture_default_str();
+  app.add_flag("--diagnose", options.diagnose,
+               "print one line per missed truth and per detection that matches no truth to "
+               "stderr: seed, frame, why, and the truths and detections whose boxes overlap it");
   app.add_option("--json", json_path, "JSON report (- for stdout)");
   app.add_option("--markdown", markdown_path, "also write the markdown tables to this file");
   app.add_option("--plots", plots_dir,

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -157,9 +159,28 @@ struct Accumulator {
   }
 };
 
+std::string DescribeBox(const cv::Rect& b) {
+  return fmt::format("[{},{} {}x{}]", b.x, b.y, b.width, b.height);
+}
+
+std::string DescribeTruth(const sim::RenderedObstacle& truth) {
+  return fmt::format("truth {} {} at {:.2f} m along ({:.2f} m straight, {} px) {}", truth.id,
+                     sim::ObstacleTypeName(truth.type), truth.near_arc_m, truth.distance_m,
+                     truth.visible_pixels, DescribeBox(truth.box));
+}
+
+// `truth`: the index of the truth it matches in `truths`, or -1.
+std::string DescribeDetection(const LineObstacle& d, int truth,
+                              const std::vector<sim::RenderedObstacle>& truths) {
+  return fmt::format("{{{} at {:.2f} m along ({:.2f} m straight) {}{}}}",
+                     LineObstacleTypeName(d.type), d.arc_m, d.distance_m, DescribeBox(d.box),
+                     truth >= 0 ? fmt::format(" = truth {}", truths[size_t(truth)].id) : "");
+}
+
 }  // namespace
 
-SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, ProgressBar* progress) {
+SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, ProgressBar* progress,
+                                     std::FILE* log) {
   options.Check();
   Stopwatch watch;
   SequenceStudyReport report;
@@ -213,6 +234,10 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
           FindLineObstacles(pipeline, frame, options.line, previous.ok() ? &previous : nullptr);
       previous = found.conductor;
       report.no_conductor_frames += !found.conductor.ok();
+      if (!found.conductor.ok() && options.diagnose && log != nullptr) {
+        fmt::print(log, "seed {} frame {}: no conductor model: {}: {}\n", seed, index,
+                   ConductorStatusName(found.conductor.status), found.conductor.reason);
+      }
       const std::vector<LineTrack> tracks = tracker.Update(now, found.obstacles);
       const std::vector<int> match = MatchDetections(found.obstacles, scene.obstacles, tol);
       std::vector<int> detection_of_truth(scene.obstacles.size(), -1);
@@ -262,6 +287,19 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
           s->typed_right += typed;
           if (k >= 0) ++s->typed_as[LineObstacleTypeName(found.obstacles[k].type)];
         }
+        if (k < 0 && options.diagnose && log != nullptr) {
+          const char* why = !found.conductor.ok() ? "no conductor"
+                            : off_distance        ? "off in distance"
+                            : covered             ? "covered"
+                                                  : "not found";
+          std::string line = fmt::format("seed {} frame {}: missed {} ({}): {}", seed, index,
+                                         DescribeTruth(truth), why, "overlapping:");
+          for (size_t q = 0; q < found.obstacles.size(); ++q) {
+            if ((found.obstacles[q].box & truth.box).area() == 0) continue;
+            line += " " + DescribeDetection(found.obstacles[q], match[q], scene.obstacles);
+          }
+          fmt::print(log, "{}\n", line);
+        }
         if (k < 0) continue;
         const LineObstacle& d = found.obstacles[k];
         const double arc_error = d.arc_m / truth.near_arc_m - 1;
@@ -289,6 +327,14 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
           if (s == nullptr) continue;
           ++s->detections;
           s->true_detections += match[k] >= 0;
+        }
+        if (match[k] < 0 && options.diagnose && log != nullptr) {
+          std::string line = fmt::format("seed {} frame {}: false {}: overlapping:", seed, index,
+                                         DescribeDetection(d, -1, scene.obstacles));
+          for (const sim::RenderedObstacle& truth : scene.obstacles) {
+            if ((d.box & truth.box).area() > 0) line += " " + DescribeTruth(truth);
+          }
+          fmt::print(log, "{}\n", line);
         }
       }
       // Tracks: which truth each fresh track follows, identity switches, time to reach.

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -53,6 +54,9 @@ struct SequenceStudyOptions {
   int min_visible_pixels = 50;              // fewer: the truth is not in view enough to score
   double match_tolerance = 0.05;            // relative, on the distance along the line
   std::vector<double> bin_edges{0.5, 1.0, 2.0, 3.0, 4.0, 5.0};  // distance bins (m along the line)
+  // Write one line per scored truth that was missed and per detection in range that matches no
+  // truth (seed, frame, why, the truths and detections involved) to the study's log.
+  bool diagnose = false;
 
   SequenceStudyOptions();
   void Check() const;
@@ -133,10 +137,11 @@ struct SequenceStudyReport {
   void WritePlots(const std::filesystem::path& dir) const;
 };
 
-// Renders and scores every sequence. `progress` advances once per frame. Throws OptionError on
-// bad options and InputError when the boards of the estimated calibration cannot be calibrated.
+// Renders and scores every sequence. `progress` advances once per frame; `log` (may be null)
+// receives, with options.diagnose, the diagnosis lines. Throws OptionError on bad options and
+// InputError when the boards of the estimated calibration cannot be calibrated.
 SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options,
-                                     ProgressBar* progress = nullptr);
+                                     ProgressBar* progress = nullptr, std::FILE* log = stderr);
 
 // Frames RunSequenceStudy processes for `options` (for a progress bar).
 int SequenceStudyFrames(const SequenceStudyOptions& options);
