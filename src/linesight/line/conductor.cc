@@ -163,10 +163,11 @@ cv::Point3d BackProject(const StereoGeometry& g, double u, double v, double d) {
 }
 
 // Radius from the image width of the inliers where the conductor is wide (d >= 20 px): per 8 px
-// of tau, the spread of the lateral residuals minus the fattening on both sides, in metres.
+// of tau, the spread of the lateral residuals minus the fattening on both sides, in metres; the
+// median over the stretches (*measured: at least 3 of them; 0 otherwise).
 double EstimateRadius(const ConductorCurve& k, const std::vector<Candidate>& all,
                       const std::vector<int>& members, const ConductorOptions& o,
-                      const StereoGeometry& g) {
+                      const StereoGeometry& g, bool* measured) {
   constexpr double kBinPx = 8.0;
   const int bins = static_cast<int>((k.tau_max - k.tau_min) / kBinPx) + 1;
   std::vector<double> lo(bins, 1e9), hi(bins, -1e9), dsum(bins, 0);
@@ -189,7 +190,8 @@ double EstimateRadius(const ConductorCurve& k, const std::vector<Candidate>& all
     const double width_px = hi[b] - lo[b] + 1.0 - 2.0 * o.fattening_px;
     radii.push_back(0.5 * width_px * g.baseline_m / (d + g.disparity_offset_px));
   }
-  if (radii.size() < 3) return 0.0;
+  *measured = radii.size() >= 3;
+  if (!*measured) return 0.0;
   std::nth_element(radii.begin(), radii.begin() + radii.size() / 2, radii.end());
   return std::max(0.0, radii[radii.size() / 2]);
 }
@@ -403,6 +405,8 @@ void ConductorOptions::Check() const {
               max_conductor_width_m, "must be > 0");
   CheckOption(max_radius_m > 0 && max_radius_m < 0.2, "ConductorOptions.max_radius_m", max_radius_m,
               "must be in (0, 0.2) m");
+  CheckOption(min_radius_m >= 0 && min_radius_m < max_radius_m, "ConductorOptions.min_radius_m",
+              min_radius_m, "must be in [0, max_radius_m)");
   CheckOption(fattening_px >= 0 && fattening_px <= 20, "ConductorOptions.fattening_px",
               fattening_px, "must be in [0, 20] px");
   CheckOption(disparity_sigma_px > 0, "ConductorOptions.disparity_sigma_px", disparity_sigma_px,
@@ -678,7 +682,11 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
       continue;
     }
     if (Coverage(*curve, all, piece.members) < options.min_coverage) continue;
-    curve->radius_m = EstimateRadius(*curve, all, piece.members, options, geometry);
+    bool measured = false;
+    curve->radius_m = EstimateRadius(*curve, all, piece.members, options, geometry, &measured);
+    // A conductor has a width: where it is near enough for the width to be measured, a curve
+    // narrower than the thinnest conductor is matching fill or fringe lined up by chance.
+    if (measured && curve->radius_m < options.min_radius_m) continue;
     BuildPolyline(curve, geometry);
     // The fringe of a conductor already found (edge pixels outside its tolerance) is not another.
     const bool same = std::any_of(found.begin(), found.end(), [&](const ConductorCurve& k) {
@@ -699,10 +707,30 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
                    [](const ConductorCurve& a, const ConductorCurve& b) {
                      return a.closest_approach_m < b.closest_approach_m;
                    });
-  model.line = found[0];
-  model.others.assign(found.begin() + 1, found.end());
+  // With a tracked model, the curves that continue it are the robot's conductor: the robot rides
+  // one conductor, so between frames its line moves only by the robot's sway. Of several such
+  // curves (pieces of it that were not joined) the one nearest the tracked line is the model and
+  // the rest are no other conductor. The nearest curve and the ambiguity test decide only without
+  // that continuity (the first frame, a lost track).
+  std::vector<bool> continues(found.size(), false);
+  int robot = -1;
+  if (previous != nullptr && previous->ok()) {
+    double nearest = 3.0 * options.max_radius_m;
+    for (size_t i = 0; i < found.size(); ++i) {
+      const double separation = MedianSeparation(found[i], previous->line);
+      continues[i] = separation < 3.0 * options.max_radius_m;
+      if (continues[i] && separation < nearest) {
+        nearest = separation;
+        robot = static_cast<int>(i);
+      }
+    }
+  }
+  model.line = found[robot < 0 ? 0 : size_t(robot)];
+  for (size_t i = robot < 0 ? 1 : 0; i < found.size(); ++i) {
+    if (!continues[i]) model.others.push_back(found[i]);
+  }
   model.status = ConductorStatus::kOk;
-  if (!model.others.empty() &&
+  if (robot < 0 && !model.others.empty() &&
       model.others[0].closest_approach_m < 1.5 * model.line.closest_approach_m) {
     model.status = ConductorStatus::kAmbiguous;
     model.reason = fmt::format(

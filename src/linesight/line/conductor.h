@@ -14,11 +14,13 @@
 // curve is that (u, v, d) curve back-projected, sampled as a polyline, extended straight from its
 // nearest observed part to the point of the line nearest to the camera centre (the robot's
 // reference on the line: arc length 0). Further conductors are found in the same way among the
-// remaining candidates; the robot's conductor is the one that passes nearest to the camera.
+// remaining candidates; a curve whose measured width is below the thinnest conductor's is none.
+// The robot's conductor is the one that passes nearest to the camera.
 //
-// With a previous frame's model the previous curve is tried first as a hypothesis, so the line is
-// tracked over frames and cannot jump to another conductor unless that one explains the pixels
-// better.
+// With a previous frame's model the previous curve is tried first as a hypothesis, and the curve
+// that continues it (within 3 max_radius_m by median) is the robot's conductor whichever passes
+// nearest: the line is tracked over frames, and a curve beside it (another conductor crossing, a
+// piece of it that was not joined) neither takes its place nor makes the model ambiguous.
 //
 // Every result has a status; without an acceptable fit it says why, and nothing downstream guesses.
 #pragma once
@@ -44,6 +46,10 @@ struct ConductorOptions {
   double max_conductor_width_m = 0.045;
   // The largest conductor radius the inlier test allows for (m).
   double max_radius_m = 0.025;
+  // The thinnest conductor's radius (m): a curve whose radius could be measured (ConductorCurve::
+  // radius_m) below it has no width of its own and is no conductor (a line of the matcher's fill
+  // beside a near conductor). 3 mm: the smallest stranded overhead conductors are ~6 mm across.
+  double min_radius_m = 0.003;
   // Edge fattening of the matcher (px on each side of a thin structure against the sky: about the
   // census window's half-width) and the disparity noise on a conductor (px, plus a relative part).
   double fattening_px = 4.0;

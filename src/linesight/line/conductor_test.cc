@@ -179,6 +179,48 @@ TEST(ConductorTest, SaysWhyWhenThereIsNoUsableLine) {
   EXPECT_FALSE(two.ok());
 }
 
+TEST(ConductorTest, ATrackedConductorStaysTheRobotsWhenAnotherPassesAsNear) {
+  const StereoGeometry g = SyntheticGeometry();
+  const cv::Point3d a0(-0.3, 0.1, 0.3), a1(2.0, 0.6, 8.0);
+  cv::Mat alone = EmptyDisparity();
+  DrawTube(&alone, g, a0, a1, 0.014);
+  const ConductorModel tracked = FitConductor(alone, g, {});
+  ASSERT_TRUE(tracked.ok()) << tracked.reason;
+  // The next frame: a second conductor crosses in front of the camera as near as the first.
+  cv::Mat crossing = alone.clone();
+  DrawTube(&crossing, g, {0.3, 0.1, 0.3}, {-2.0, 0.6, 8.0}, 0.014);
+  ASSERT_EQ(FitConductor(crossing, g, {}).status, ConductorStatus::kAmbiguous);
+  const ConductorModel next = FitConductor(crossing, g, {}, cv::Mat(), &tracked);
+  ASSERT_TRUE(next.ok()) << next.reason;
+  // The model is the tracked line, the crossing one is another conductor.
+  for (const double t : {0.1, 0.5, 0.9}) {
+    EXPECT_LT(next.Locate(a0 + (a1 - a0) * t).offset_m, 0.03) << t;
+  }
+  ASSERT_EQ(next.others.size(), 1u);
+  EXPECT_GT(next.Locate({-0.9, 0.35, 4.0}).offset_m, 0.5);
+}
+
+TEST(ConductorTest, ALineWithoutWidthIsNoConductor) {
+  const StereoGeometry g = SyntheticGeometry();
+  cv::Mat d = EmptyDisparity();
+  DrawTube(&d, g, {0.05, -0.1, 0.3}, {0.6, 0.8, 8.0}, 0.014);
+  // Beside it, a line of near disparities no wider than the matcher's fattening (fill lined up by
+  // chance, 3 px across from 0.3 to 2 m) that passes nearer the camera than the conductor.
+  cv::Mat fill = EmptyDisparity();
+  DrawTube(&fill, g, {-0.12, -0.1, 0.3}, {-1.0, -0.3, 2.0}, 0.0);
+  fill.copyTo(d, fill < std::numeric_limits<float>::infinity());
+  ConductorOptions without_rule;
+  without_rule.min_radius_m = 0.0;
+  // Without the width test the fill, passing nearer, is taken for the robot's conductor.
+  const ConductorModel taken = FitConductor(d, g, without_rule);
+  ASSERT_TRUE(taken.ok()) << taken.reason;
+  EXPECT_LT(taken.line.radius_m, 0.003);
+  const ConductorModel model = FitConductor(d, g, {});
+  ASSERT_TRUE(model.ok()) << model.reason;
+  EXPECT_TRUE(model.others.empty());
+  EXPECT_GT(model.line.radius_m, 0.01);
+}
+
 TEST(ConductorTest, RejectsBadOptionsAndMaps) {
   ConductorOptions o;
   o.max_depth_m = 0.1;
