@@ -72,7 +72,9 @@ int RunEvalRanging(int argc, char** argv) {
                "print one line per run and calibration to stderr: truth, measured, the same "
                "estimator on the ground-truth disparity, and the matcher's disparity error on the "
                "obstacle's nearest-surface pixels, and the calibration's own depth error at the "
-               "nearest point (for finding a cell's bias)");
+               "nearest point (for finding a cell's bias); with --real one line per region: "
+               "measured, the estimator on the ground truth, the reading with thin structures "
+               "kept, the matcher's median error over the ROI");
   return RunCommand(app, argc, argv, [&] {
     options.pipeline.params = ParseParams(raw_params);
     ApplyRangingSettings("--ranging", ranging_settings, &options.pipeline);
@@ -80,6 +82,7 @@ int RunEvalRanging(int argc, char** argv) {
       RealRangingOptions real;
       real.root = real_root;
       real.pipeline = options.pipeline;
+      real.diagnose = options.diagnose;
       ProgressBar progress(static_cast<int64_t>(MetricScenes(real.root).size()),
                            "eval ranging --real");
       const RealRangingReport report = RunRealRangingStudy(real, &progress);

@@ -22,6 +22,7 @@
 // depths widened by 10 %), then every region's ROI is ranged (RangeRois).
 #pragma once
 
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -70,6 +71,10 @@ struct RealRangingOptions {
   std::filesystem::path root = LINESIGHT_SHARED_DATA_DIR;  // searched with FindScenes
   RealRegionOptions regions;
   RangingPipelineOptions pipeline;  // input_rectified and the working range are set per scene
+  // Write one line per region to the study's log: the reading, the same estimator on the ground
+  // truth (its own error without the matcher's), the reading with thin structures kept
+  // (min_body_width_m = 0) and the matcher's median error over the ROI.
+  bool diagnose = false;
 
   void Check() const;
 };
@@ -102,9 +107,10 @@ struct RealRangingReport {
   std::string ToSvg() const;
 };
 
-// Throws InputError when the root holds no scene with a metric calibration.
+// Throws InputError when the root holds no scene with a metric calibration. `log` (may be null)
+// receives the diagnosis lines with options.diagnose.
 RealRangingReport RunRealRangingStudy(const RealRangingOptions& options,
-                                      ProgressBar* progress = nullptr);
+                                      ProgressBar* progress = nullptr, std::FILE* log = stderr);
 // Scenes of `root` with a metric calibration (focal, baseline known), as RunRealRangingStudy
 // ranges them.
 std::vector<SceneRef> MetricScenes(const std::filesystem::path& root);

@@ -1,6 +1,8 @@
 #include "linesight/eval/real_ranging.h"
 
+#include <cstdio>
 #include <filesystem>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -85,8 +87,22 @@ TEST(RealRangingStudy, RangesTheRealPairsOfTheSharedData) {
   RealRangingOptions options;
   options.root = kSharedData;
   options.pipeline.threads = 2;
-  const RealRangingReport report = RunRealRangingStudy(options);
+  options.diagnose = true;
+  std::FILE* log = std::tmpfile();
+  ASSERT_NE(log, nullptr);
+  const RealRangingReport report = RunRealRangingStudy(options, nullptr, log);
   EXPECT_EQ(report.scenes.size(), 12u);  // Motorcycle, terrace, ten 2005/2006 scenes
+  // One diagnosis line per region, with the estimator's reading on the ground truth.
+  std::rewind(log);
+  std::string text;
+  for (int c = std::fgetc(log); c != EOF; c = std::fgetc(log)) text.push_back(char(c));
+  std::fclose(log);
+  size_t lines = 0;
+  for (size_t at = text.find("the estimator on the truth"); at != std::string::npos;
+       at = text.find("the estimator on the truth", at + 1)) {
+    ++lines;
+  }
+  EXPECT_EQ(lines, report.regions.size());
   const RealRangingReport::Summary all = report.Summarise();
   EXPECT_GE(all.regions, 50);
   EXPECT_GE(all.measured, all.regions - 2);
