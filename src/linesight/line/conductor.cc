@@ -673,6 +673,8 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
     pieces.push_back({*curve, std::move(members)});
   }
   MergeContinuations(all, tol, &pieces);
+  // Curves whose points lie within 3 radii of another's (median) are one conductor.
+  const double same_line_m = 3.0 * options.max_radius_m;
   std::vector<ConductorCurve> found;
   bool end_on = false;
   for (Piece& piece : pieces) {
@@ -690,7 +692,7 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
     BuildPolyline(curve, geometry);
     // The fringe of a conductor already found (edge pixels outside its tolerance) is not another.
     const bool same = std::any_of(found.begin(), found.end(), [&](const ConductorCurve& k) {
-      return MedianSeparation(*curve, k) < 3.0 * options.max_radius_m;
+      return MedianSeparation(*curve, k) < same_line_m;
     });
     if (!same) found.push_back(*curve);
   }
@@ -715,19 +717,20 @@ ConductorModel FitConductor(const cv::Mat& disparity, const StereoGeometry& geom
   std::vector<bool> continues(found.size(), false);
   int robot = -1;
   if (previous != nullptr && previous->ok()) {
-    double nearest = 3.0 * options.max_radius_m;
+    double nearest = same_line_m;
     for (size_t i = 0; i < found.size(); ++i) {
       const double separation = MedianSeparation(found[i], previous->line);
-      continues[i] = separation < 3.0 * options.max_radius_m;
+      continues[i] = separation < same_line_m;
       if (continues[i] && separation < nearest) {
         nearest = separation;
         robot = static_cast<int>(i);
       }
     }
   }
-  model.line = found[robot < 0 ? 0 : size_t(robot)];
-  for (size_t i = robot < 0 ? 1 : 0; i < found.size(); ++i) {
-    if (!continues[i]) model.others.push_back(found[i]);
+  const size_t line = robot < 0 ? 0 : size_t(robot);
+  model.line = found[line];
+  for (size_t i = 0; i < found.size(); ++i) {
+    if (i != line && !continues[i]) model.others.push_back(found[i]);
   }
   model.status = ConductorStatus::kOk;
   if (robot < 0 && !model.others.empty() &&
