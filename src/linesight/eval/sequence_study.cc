@@ -273,27 +273,28 @@ SequenceStudyReport RunSequenceStudy(const SequenceStudyOptions& options, Progre
           if ((found.obstacles[q].box & truth.box).area() == 0) continue;
           (match[q] < 0 ? off_distance : covered) = true;
         }
+        // Why it was missed, if it was: the counter of SequenceRateStats and the name.
+        struct Miss {
+          int SequenceRateStats::*counter;
+          const char* name;
+        };
+        const Miss miss =
+            !found.conductor.ok() ? Miss{&SequenceRateStats::missed_no_conductor, "no conductor"}
+            : off_distance        ? Miss{&SequenceRateStats::missed_off_distance, "off in distance"}
+            : covered             ? Miss{&SequenceRateStats::missed_covered, "covered"}
+                                  : Miss{&SequenceRateStats::missed_not_found, "not found"};
         for (SequenceRateStats* s : {&acc.all, type >= 0 ? &acc.by_type[type] : nullptr,
                                      bin >= 0 ? &acc.by_bin[bin] : nullptr}) {
           if (s == nullptr) continue;
           ++s->scored;
           s->matched += k >= 0;
-          if (k < 0) {
-            ++(!found.conductor.ok() ? s->missed_no_conductor
-               : off_distance        ? s->missed_off_distance
-               : covered             ? s->missed_covered
-                                     : s->missed_not_found);
-          }
+          if (k < 0) ++(s->*miss.counter);
           s->typed_right += typed;
           if (k >= 0) ++s->typed_as[LineObstacleTypeName(found.obstacles[k].type)];
         }
         if (k < 0 && options.diagnose && log != nullptr) {
-          const char* why = !found.conductor.ok() ? "no conductor"
-                            : off_distance        ? "off in distance"
-                            : covered             ? "covered"
-                                                  : "not found";
-          std::string line = fmt::format("seed {} frame {}: missed {} ({}): {}", seed, index,
-                                         DescribeTruth(truth), why, "overlapping:");
+          std::string line = fmt::format("seed {} frame {}: missed {} ({}): overlapping:", seed,
+                                         index, DescribeTruth(truth), miss.name);
           for (size_t q = 0; q < found.obstacles.size(); ++q) {
             if ((found.obstacles[q].box & truth.box).area() == 0) continue;
             line += " " + DescribeDetection(found.obstacles[q], match[q], scene.obstacles);
