@@ -8,7 +8,10 @@
 //    not kept and path traversal (404), a wrong method (405 with Allow), a POST that is not JSON (415), a 100 kB URL (414), and
 //    a request sent in half and left open.
 // 2. Load: `--clients` concurrent clients for `--seconds`, a quarter on the event stream, a quarter
-//    on the MJPEG stream, the rest on the API and the images: no failed request, every stream
+//    on the MJPEG stream, the rest on the API and the images, each at most `--rate` requests per
+//    second (the server closes a connection after one idle second, so each request is a new
+//    connection, and unpaced clients on a fast machine can run the loopback out of ephemeral
+//    ports: some 28 000, each held 60 s in TIME_WAIT): no failed request, every stream
 //    client receives at least 90 % of the frames (streams send the newest), RSS growth under 10 %
 //    (from after a warm-up). Then a client
 //    that opens the video and never reads it does not slow the pipeline (frames in 10 s with it
@@ -37,8 +40,11 @@ function arg(name, fallback) {
 }
 const linesight = arg("--linesight"), clients = Number(arg("--clients", "20"));
 const seconds = Number(arg("--seconds", "30")), jsonPath = arg("--json", "");
+const rate = Number(arg("--rate", "40"));  // requests per second of one API client
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 let failures = 0;
+// A network error's message with its cause (fetch says only "fetch failed").
+const why = (e) => `${e.message}${e.cause ? ` (${e.cause.code || e.cause.message})` : ""}`;
 function check(ok, what) {
   console.log(`${ok ? "ok" : "FAIL"}: ${what}`);
   if (!ok) failures++;
@@ -149,7 +155,11 @@ try {
   // 2. Load.
   const paths = ["/api/status", "/api/result", "/api/frame/left.jpg", "/api/frame/disparity.jpg"];
   const warm = Date.now() + 3000;
-  while (Date.now() < warm) await Promise.all(paths.map((p) => fetch(b + p).then((r) => r.arrayBuffer())));
+  while (Date.now() < warm) {
+    const t = Date.now();
+    await Promise.all(paths.map((p) => fetch(b + p).then((r) => r.arrayBuffer())));
+    await sleep(t + 1000 / rate - Date.now());
+  }
   const rss0 = rssKb(server.child.pid);
   let ok = 0, failed = 0, maxMs = 0;
   const frame0 = (await (await fetch(b + "/api/status")).json()).frame;
@@ -185,15 +195,18 @@ try {
         const res = await fetch(b + paths[i % paths.length] + (i % 8 === 1 ? "?after=-1" : ""));
         await res.arrayBuffer();
         if (res.status === 200) ok++; else failed++;
-      } catch { failed++; }
+      } catch (e) {
+        if (failed++ === 0) console.error(`first failed request: ${why(e)}`);
+      }
       maxMs = Math.max(maxMs, Date.now() - t);
+      await sleep(t + 1000 / rate - Date.now());
     }
   };
   await Promise.all(Array.from({ length: clients }, (_, k) => worker(k)));
   const frames = (await (await fetch(b + "/api/status")).json()).frame - frame0;
   const rss1 = rssKb(server.child.pid);
   const fewest = (kind) => Math.min(...streamed.filter((c) => c.kind === kind).map((c) => c.count));
-  Object.assign(figures, { clients, seconds, requests: ok + failed, failed, max_latency_ms: maxMs,
+  Object.assign(figures, { clients, seconds, rate_per_api_client: rate, requests: ok + failed, failed, max_latency_ms: maxMs,
     frames_published: frames, fewest_events_received: fewest("events"), fewest_mjpeg_parts_received: fewest("mjpeg"),
     rss_start_mb: rss0 / 1024, rss_end_mb: rss1 / 1024, rss_growth: rss1 / rss0 - 1 });
   check(failed === 0, `${clients} clients for ${seconds} s: ${ok + failed} requests and streams, ${failed} failed, slowest request ${maxMs} ms`);
@@ -225,7 +238,7 @@ try {
   open.destroy();
 } catch (e) {
   failures++;
-  console.error(`FAIL: ${e.message}\nserve's log:\n${server.log()}`);
+  console.error(`FAIL: ${why(e)}\nserve's log:\n${server.log()}`);
 } finally {
   server.child.kill("SIGKILL");
 }
@@ -243,7 +256,7 @@ try {
   figures.sigint_exit_ms = await expectCleanExit(guarded, "SIGINT");
 } catch (e) {
   failures++;
-  console.error(`FAIL: ${e.message}\nserve's log:\n${guarded.log()}`);
+  console.error(`FAIL: ${why(e)}\nserve's log:\n${guarded.log()}`);
 } finally {
   guarded.child.kill("SIGKILL");
 }
@@ -308,7 +321,7 @@ open(f"{d}/right_cut.avi", "wb").write(data[: len(data) * 6 // 10])
   }
 } catch (e) {
   failures++;
-  console.error(`FAIL: ${e.message}`);
+  console.error(`FAIL: ${why(e)}`);
 } finally {
   fs.rmSync(pairs, { recursive: true, force: true });
 }
