@@ -24,8 +24,9 @@ namespace fs = std::filesystem;
 int RunInspect(int argc, char** argv) {
   CLI::App app{
       "The conductor the robot rides on, inspected: its radius profile along the line from the "
-      "image edges in both views, and bird-caging (a swelling of the strands) with its position "
-      "along the line. --left/--right take one pair or two globs of a sequence (paired in sorted "
+      "image edges in both views, bird-caging (a swelling of the strands) and foreign objects on "
+      "the line (a nest on top, a sheet hanging from it) with their positions along the line. "
+      "--left/--right take one pair or two globs of a sequence (paired in sorted "
       "order; the conductor is tracked from frame to frame).",
       "inspect"};
   std::string calib_path, left_pattern, right_pattern, json_path, crops_dir;

@@ -266,12 +266,42 @@ std::vector<Stretch> Runs(const std::vector<RadiusSample>& profile,
   return runs;
 }
 
+// Foreign objects on the line up to max_arc_m: the obstacles the finder could not type as a
+// fitting (LineObstacleType::kUnknown), on top of the line ("nest") or hanging from it ("sheet"),
+// whichever way they reach farther. One the ranging chain could not measure is no fault: its
+// distance is only its run's rough near end, and its pixels are as often a stray piece of the
+// background as an object.
+void AddForeignObjects(const LineObstacles& line, const ConductorFaultOptions& o,
+                       std::vector<ConductorFault>* faults) {
+  for (const LineObstacle& ob : line.obstacles) {
+    if (ob.type != LineObstacleType::kUnknown || !ob.range.ok() || ob.arc_m > o.max_arc_m) {
+      continue;
+    }
+    ConductorFault f;
+    const bool hanging = ob.below_m > ob.above_m;
+    f.type = hanging ? ConductorFaultType::kSheet : ConductorFaultType::kNest;
+    f.arc_begin_m = ob.arc_m;
+    f.arc_end_m = ob.arc_m + ob.length_m;
+    f.arc_m = 0.5 * (f.arc_begin_m + f.arc_end_m);
+    f.distance_m = ob.distance_m;
+    f.size_m = hanging ? std::max(ob.below_m, ob.length_m)
+                       : std::max({ob.above_m, ob.length_m, 2 * ob.side_m});
+    f.confidence = ob.confidence;
+    f.box = ob.box;
+    faults->push_back(f);
+  }
+}
+
 }  // namespace
 
 std::string ConductorFaultTypeName(ConductorFaultType type) {
   switch (type) {
     case ConductorFaultType::kBirdcage:
       return "birdcage";
+    case ConductorFaultType::kNest:
+      return "nest";
+    case ConductorFaultType::kSheet:
+      return "sheet";
   }
   return "unknown";
 }
@@ -494,6 +524,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
         "only {} samples of the line could be measured (too little contrast "
         "against the background)",
         measured_count);
+    AddForeignObjects(line, o, &out.faults);
     return out;
   }
   out.radius_m = Median(radii);
@@ -625,6 +656,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     f.size_m = largest;
     out.faults.push_back(f);
   }
+  AddForeignObjects(line, o, &out.faults);
 
   std::sort(out.faults.begin(), out.faults.end(),
             [](const ConductorFault& a, const ConductorFault& b) {

@@ -31,9 +31,13 @@
 // or a bright cloud edge) are not measured, and a stretch without enough measured samples gives no
 // verdict: the report says how much of the line was inspected.
 //
-// Broken strands and foreign objects (string, sheet, nest) are not reported yet (on the tuning
-// sequences the protrusions found 1 of 31 broken strands); a bird-cage where the line crosses the
-// horizon or passes in front of ground of its own grey is missed (docs/algorithms/faults.md).
+// Foreign objects are the line obstacles whose shape is no fitting's (FindLineObstacles types them
+// "unknown": a mass on top of the line that spreads to its sides without rising into a string of
+// discs, or something hanging deeper than a damper's weights): "nest" on top, "sheet" hanging.
+// Broken strands and hanging strings (a few millimetres thick, thinner than any body) are not
+// reported yet (on the tuning sequences the protrusions found 1 of 31 broken strands); a bird-cage
+// where the line crosses the horizon or passes in front of ground of its own grey is missed
+// (docs/algorithms/faults.md).
 #pragma once
 
 #include <string>
@@ -47,8 +51,14 @@
 
 namespace linesight {
 
-enum class ConductorFaultType { kBirdcage };
-// "birdcage" (the synthetic scene's defect name).
+enum class ConductorFaultType {
+  kBirdcage,  // a swelling of the conductor where its outer strands have spread
+  // Foreign objects: an obstacle on the line whose shape is no fitting's (line_obstacles.h), on
+  // top of the line (a bird's nest) or hanging from it (a plastic sheet, a rag).
+  kNest,
+  kSheet,
+};
+// "birdcage", "nest", "sheet" (the synthetic scene's defect names).
 std::string ConductorFaultTypeName(ConductorFaultType type);
 
 struct ConductorFaultOptions {
@@ -121,7 +131,8 @@ struct ConductorFault {
   double arc_m = 0;                       // centre of the stretch along the line (m)
   double arc_begin_m = 0, arc_end_m = 0;  // its extent (m)
   double distance_m = 0;                  // depth of the line there (m)
-  // The largest increase of the extent over the clean conductor's (m).
+  // Birdcage: the largest increase of the extent over the clean conductor's (m). Nest: its largest
+  // extent (above the line, along it, across it); sheet: how far it hangs or its length (m).
   double size_m = 0;
   double confidence = 0;  // 0..1: the evidence above its threshold and the share measured
   cv::Rect box;           // rectified left image

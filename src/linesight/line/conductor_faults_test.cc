@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -58,8 +59,12 @@ TEST(ConductorFaultsTest, ACleanLineHasItsRadiusAndNoFault) {
     if (print) {
       Print(r.inspection);
       for (const LineObstacle& ob : r.line.obstacles) {
-        std::printf("  obstacle %s arc %.2f m length %.2f m\n",
-                    LineObstacleTypeName(ob.type).c_str(), ob.arc_m, ob.length_m);
+        std::printf(
+            "  obstacle %s arc %.2f m length %.2f above %.2f below %.2f side %.2f (on top %.2f) m, "
+            "%d px, box %d,%d,%d,%d, confidence %.2f\n",
+            LineObstacleTypeName(ob.type).c_str(), ob.arc_m, ob.length_m, ob.above_m, ob.below_m,
+            ob.side_m, ob.top_side_m, ob.pixels, ob.box.x, ob.box.y, ob.box.width, ob.box.height,
+            ob.confidence);
       }
       for (const sim::RenderedObstacle& t : r.scene.obstacles) {
         std::printf("  truth %s near arc %.2f m\n", sim::ObstacleTypeName(t.type).c_str(),
@@ -118,6 +123,44 @@ TEST(ConductorFaultsTest, ALitBirdcageIsFoundWithItsSwelling) {
     EXPECT_GE(f.arc_end_m, truth.arc_begin_m);
     EXPECT_NEAR(f.size_m, truth.size_m, 0.5 * truth.size_m);
     EXPECT_NEAR(f.distance_m, truth.distance_m, 0.15);
+  }
+}
+
+// A bird's nest on the line of the default scene (a damper 1.5 m ahead, a suspension clamp and an
+// insulator string behind it) is a foreign object: one "nest" fault on its stretch of the line, at
+// its depth, for a 20 cm nest 1.1 m (before the damper) and 2.3 m along the line and a 25 cm one
+// at 2.8 m. The damper stays a damper and is no fault.
+TEST(ConductorFaultsTest, ANestOnTheLineIsAForeignObjectAndTheFittingsAreNot) {
+  for (const auto& [arc, diameter] :
+       {std::pair{1.1, 0.2}, std::pair{2.3, 0.2}, std::pair{2.8, 0.25}}) {
+    SCOPED_TRACE(arc);
+    sim::PowerLineSceneOptions o;
+    o.sensor.supersampling = 2;
+    sim::DefectSpec d;
+    d.type = sim::DefectType::kBirdNest;
+    d.arc_m = arc;
+    d.length_m = diameter;
+    o.defects = {d};
+    const Inspected r = InspectScene(sim::RenderPowerLineScene(o));
+    ASSERT_EQ(r.scene.defects.size(), 1u);
+    const sim::RenderedDefect& truth = r.scene.defects[0];
+    ASSERT_EQ(r.inspection.faults.size(), 1u);
+    const ConductorFault& f = r.inspection.faults[0];
+    EXPECT_EQ(f.type, ConductorFaultType::kNest);
+    EXPECT_LE(f.arc_begin_m, truth.arc_end_m);
+    EXPECT_GE(f.arc_end_m, truth.arc_begin_m);
+    EXPECT_NEAR(f.distance_m, truth.distance_m, 0.05 * truth.distance_m);
+    for (const sim::RenderedObstacle& fitting : r.scene.obstacles) {
+      if (fitting.type != sim::ObstacleType::kDamper) continue;  // the others are behind the nest
+      int typed = 0;
+      for (const LineObstacle& ob : r.line.obstacles) {
+        if ((ob.box & fitting.box).area() > 0 &&
+            std::fabs(ob.arc_m - fitting.near_arc_m) < 0.1 * fitting.near_arc_m) {
+          typed += LineObstacleTypeName(ob.type) == sim::ObstacleTypeName(fitting.type);
+        }
+      }
+      EXPECT_EQ(typed, 1) << sim::ObstacleTypeName(fitting.type);
+    }
   }
 }
 

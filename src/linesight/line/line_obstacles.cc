@@ -176,10 +176,20 @@ std::vector<std::vector<LinePoint>> SplitAlongLine(std::vector<LinePoint> points
   return runs;
 }
 
-LineObstacleType Classify(const LineObstacle& o, const LineObstacleOptions& opt) {
-  if (o.above_m >= opt.insulator_min_above_m || o.side_m >= opt.insulator_min_side_m) {
-    return LineObstacleType::kInsulator;
+// `radius_m`: the conductor's.
+LineObstacleType Classify(const LineObstacle& o, const LineObstacleOptions& opt, double radius_m) {
+  // A string of discs rising above the line.
+  if (o.above_m >= opt.insulator_min_above_m) return LineObstacleType::kInsulator;
+  // What no fitting is: a mass on top of the line that spreads to its sides, or something hanging
+  // deeper than a damper's weights.
+  const double outline_m2 = 2 * o.top_side_m * (o.above_m + radius_m);
+  if ((o.above_m >= opt.foreign_min_above_m && o.top_side_m >= opt.foreign_min_side_m &&
+       o.area_m2 >= opt.foreign_min_fill * outline_m2) ||
+      o.below_m >= opt.foreign_min_below_m) {
+    return LineObstacleType::kUnknown;
   }
+  // The discs of a string whose top is out of view reach wide to the sides.
+  if (o.side_m >= opt.insulator_min_side_m) return LineObstacleType::kInsulator;
   if (o.below_m >= opt.damper_min_below_m) return LineObstacleType::kDamper;
   return LineObstacleType::kClamp;
 }
@@ -355,7 +365,7 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
   double area = 0;
   for (const LinePoint& p : run) area += (p.z / g.focal_px) * (p.z / g.focal_px);
   if (area < o.min_area_m2) return false;
-  std::vector<double> z, arc, down, up, side;
+  std::vector<double> z, arc, down, up, side, top_side;
   int x0 = run[0].x, x1 = run[0].x, y0 = run[0].y, y1 = run[0].y;
   for (const LinePoint& p : run) {
     z.push_back(p.z);
@@ -363,6 +373,7 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
     down.push_back(p.down);
     up.push_back(-p.down);
     side.push_back(std::fabs(p.side));
+    if (p.down < 0 && p.down >= -o.foreign_top_band_m) top_side.push_back(std::fabs(p.side));
     x0 = std::min(x0, p.x);
     x1 = std::max(x1, p.x);
     y0 = std::min(y0, p.y);
@@ -371,12 +382,15 @@ bool Describe(const std::vector<LinePoint>& all, const ConductorModel& model,
   const double fat = o.conductor.fattening_px * Quantile(z, 0.5) / g.focal_px;
   if (attached < o.min_attached_pixels) return false;
   out->pixels = static_cast<int>(run.size());
+  out->area_m2 = area;
   out->length_m = std::max(0.0, Quantile(arc, 0.97) - Quantile(arc, 0.03));
   out->above_m = std::max(0.0, Quantile(up, 0.97) - fat);
   out->below_m = std::max(0.0, Quantile(down, 0.97) - fat);
   out->side_m = std::max(0.0, Quantile(side, 0.97) - fat);
-  out->type = Classify(*out, o);
+  out->top_side_m = top_side.empty() ? 0.0 : std::max(0.0, Quantile(top_side, 0.97) - fat);
   out->box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
+  out->type =
+      Classify(*out, o, model.line.radius_m > 0 ? model.line.radius_m : o.conductor.max_radius_m);
   out->mask = cv::Mat::zeros(out->box.size(), CV_8UC1);
   for (const LinePoint& p : run) out->mask.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
   out->confidence = std::min(1.0, run.size() / (4.0 * o.min_pixels)) *
@@ -608,6 +622,14 @@ void LineObstacleOptions::Check() const {
               insulator_min_side_m, "must be > 0");
   CheckOption(damper_min_below_m > 0, "LineObstacleOptions.damper_min_below_m", damper_min_below_m,
               "must be > 0");
+  CheckOption(foreign_min_above_m > 0, "LineObstacleOptions.foreign_min_above_m",
+              foreign_min_above_m, "must be > 0");
+  CheckOption(foreign_min_side_m > 0, "LineObstacleOptions.foreign_min_side_m", foreign_min_side_m,
+              "must be > 0");
+  CheckOption(foreign_top_band_m > 0, "LineObstacleOptions.foreign_top_band_m", foreign_top_band_m,
+              "must be > 0");
+  CheckOption(foreign_min_below_m > damper_min_below_m, "LineObstacleOptions.foreign_min_below_m",
+              foreign_min_below_m, "must be above damper_min_below_m");
 }
 
 nlohmann::json LineObstacle::ToJson() const {
@@ -620,6 +642,7 @@ nlohmann::json LineObstacle::ToJson() const {
                       {"above_m", above_m},
                       {"below_m", below_m},
                       {"side_m", side_m},
+                      {"top_side_m", top_side_m},
                       {"box", {box.x, box.y, box.width, box.height}},
                       {"pixels", pixels},
                       {"confidence", confidence},

@@ -13,11 +13,20 @@
 // uncertainty); the distance along the line is the arc of that nearest surface: its pixels
 // back-projected at that distance and located on the line (the near end of the obstacle). The type
 // follows from the obstacle's extent around the line, with the matcher's edge fattening (a few
-// pixels, so Z * px / f metres) removed:
-//   insulator string - reaches far above the line (a vertical string of discs) or wide to the sides
+// pixels, so Z * px / f metres) removed, by the first of these that holds:
+//   insulator string - reaches far above the line (a vertical string of discs)
+//   unknown          - a foreign object, its shape no fitting's: a mass on top of the line that
+//                      spreads to its sides (what a fitting has there, a suspension clamp's keeper
+//                      and hanger, an insulator string's link up to its first disc, a damper's
+//                      clamp, is as narrow as a clamp body, 44-52 mm across) and fills its outline
+//                      as a solid body does (stray matches of the background that pass for a wide
+//                      mass are sparse), or something hanging deeper than a damper's weights
+//                      (~0.11 m under the axis)
+//   insulator string - wide to the sides (the discs of a string whose top is out of view)
 //   damper           - hangs below the line (the weights on their messenger cable)
 //   clamp            - compact around the line
-// and "unknown" when too little of it is seen to tell.
+// A foreign object (a bird's nest, a plastic sheet) is an obstacle on the line all the same;
+// InspectConductor (conductor_faults.h) also reports it as a fault.
 #pragma once
 
 #include <map>
@@ -108,6 +117,17 @@ struct LineObstacleOptions {
   double insulator_min_above_m = 0.25;
   double insulator_min_side_m = 0.08;
   double damper_min_below_m = 0.07;
+  // Foreign objects (type unknown): on top, above_m >= foreign_min_above_m with top_side_m >=
+  // foreign_min_side_m, where top_side_m is measured on the points up to foreign_top_band_m above
+  // the axis (an insulator string's clamp, hanger and link reach ~0.17 m before its first disc),
+  // and area_m2 at least foreign_min_fill of its outline across the view, 2 top_side_m wide and
+  // above_m + the conductor's radius
+  // high; hanging, below_m >= foreign_min_below_m.
+  double foreign_min_above_m = 0.05;
+  double foreign_min_side_m = 0.06;
+  double foreign_top_band_m = 0.15;
+  double foreign_min_fill = 0.3;
+  double foreign_min_below_m = 0.13;
 
   void Check() const;
 };
@@ -120,8 +140,12 @@ struct LineObstacle {
   double distance_m = 0.0, sigma_m = 0.0;
   // Extent along the line, above, below and to the side of the axis (m, fattening removed).
   double length_m = 0.0, above_m = 0.0, below_m = 0.0, side_m = 0.0;
-  cv::Rect box;  // rectified left image
-  cv::Mat mask;  // CV_8UC1 of the box's size, 255 on the obstacle's pixels
+  // How far to the side what sits on top of the line reaches: the points up to foreign_top_band_m
+  // above the axis (m, fattening removed; 0 without such points).
+  double top_side_m = 0.0;
+  double area_m2 = 0.0;  // its pixels' area at their depths (m^2)
+  cv::Rect box;          // rectified left image
+  cv::Mat mask;          // CV_8UC1 of the box's size, 255 on the obstacle's pixels
   int pixels = 0;
   // 0..1: how much of the obstacle supports the result (pixels seen and touching the line, a
   // ranging measurement) - the share a tracker may rely on.
