@@ -107,6 +107,20 @@ TEST(ConductorFaultsTest, ACleanRisingLineHasNoFault) {
   EXPECT_TRUE(r.inspection.faults.empty());
 }
 
+// The inspection's one fault, of `type`, on the scene's one defect's stretch of the line (nullptr,
+// with a failure, when there is not exactly one of each).
+const ConductorFault* TheFaultOnTheDefect(const Inspected& r, ConductorFaultType type) {
+  EXPECT_EQ(r.scene.defects.size(), 1u);
+  EXPECT_EQ(r.inspection.faults.size(), 1u);
+  if (r.scene.defects.size() != 1 || r.inspection.faults.size() != 1) return nullptr;
+  const sim::RenderedDefect& truth = r.scene.defects[0];
+  const ConductorFault& f = r.inspection.faults[0];
+  EXPECT_EQ(f.type, type);
+  EXPECT_LE(f.arc_begin_m, truth.arc_end_m);
+  EXPECT_GE(f.arc_end_m, truth.arc_begin_m);
+  return &f;
+}
+
 // A lit bird-cage swelling the conductor's radius by 30 % is found on its stretch at 1.2 m and at
 // 2 m along the line, at its depth, with its radius increase within 50 %.
 TEST(ConductorFaultsTest, ALitBirdcageIsFoundWithItsSwelling) {
@@ -114,15 +128,11 @@ TEST(ConductorFaultsTest, ALitBirdcageIsFoundWithItsSwelling) {
     SCOPED_TRACE(arc);
     const Inspected r = InspectScene(sim::RenderPowerLineScene(BirdcageScene(arc, 0.3)));
     ASSERT_EQ(r.inspection.status, InspectionStatus::kOk);
-    ASSERT_EQ(r.scene.defects.size(), 1u);
+    const ConductorFault* f = TheFaultOnTheDefect(r, ConductorFaultType::kBirdcage);
+    if (f == nullptr) continue;
     const sim::RenderedDefect& truth = r.scene.defects[0];
-    ASSERT_EQ(r.inspection.faults.size(), 1u);
-    const ConductorFault& f = r.inspection.faults[0];
-    EXPECT_EQ(f.type, ConductorFaultType::kBirdcage);
-    EXPECT_LE(f.arc_begin_m, truth.arc_end_m);
-    EXPECT_GE(f.arc_end_m, truth.arc_begin_m);
-    EXPECT_NEAR(f.size_m, truth.size_m, 0.5 * truth.size_m);
-    EXPECT_NEAR(f.distance_m, truth.distance_m, 0.15);
+    EXPECT_NEAR(f->size_m, truth.size_m, 0.5 * truth.size_m);
+    EXPECT_NEAR(f->distance_m, truth.distance_m, 0.15);
   }
 }
 
@@ -142,14 +152,10 @@ TEST(ConductorFaultsTest, ANestOnTheLineIsAForeignObjectAndTheFittingsAreNot) {
     d.length_m = diameter;
     o.defects = {d};
     const Inspected r = InspectScene(sim::RenderPowerLineScene(o));
-    ASSERT_EQ(r.scene.defects.size(), 1u);
+    const ConductorFault* f = TheFaultOnTheDefect(r, ConductorFaultType::kNest);
+    if (f == nullptr) continue;
     const sim::RenderedDefect& truth = r.scene.defects[0];
-    ASSERT_EQ(r.inspection.faults.size(), 1u);
-    const ConductorFault& f = r.inspection.faults[0];
-    EXPECT_EQ(f.type, ConductorFaultType::kNest);
-    EXPECT_LE(f.arc_begin_m, truth.arc_end_m);
-    EXPECT_GE(f.arc_end_m, truth.arc_begin_m);
-    EXPECT_NEAR(f.distance_m, truth.distance_m, 0.05 * truth.distance_m);
+    EXPECT_NEAR(f->distance_m, truth.distance_m, 0.05 * truth.distance_m);
     for (const sim::RenderedObstacle& fitting : r.scene.obstacles) {
       if (fitting.type != sim::ObstacleType::kDamper) continue;  // the others are behind the nest
       int typed = 0;
