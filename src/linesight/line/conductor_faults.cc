@@ -306,6 +306,10 @@ std::string ConductorFaultTypeName(ConductorFaultType type) {
   return "unknown";
 }
 
+bool IsForeignObject(ConductorFaultType type) {
+  return type == ConductorFaultType::kNest || type == ConductorFaultType::kSheet;
+}
+
 std::string InspectionStatusName(InspectionStatus status) {
   switch (status) {
     case InspectionStatus::kOk:

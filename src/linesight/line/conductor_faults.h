@@ -60,6 +60,10 @@ enum class ConductorFaultType {
 };
 // "birdcage", "nest", "sheet" (the synthetic scene's defect names).
 std::string ConductorFaultTypeName(ConductorFaultType type);
+// Whether a fault is a foreign object (nest, sheet) rather than damage to the conductor. One object
+// may read as a nest in one frame and a sheet in the next (its extents above and below the line
+// are alike), so sightings of foreign objects are one kind.
+bool IsForeignObject(ConductorFaultType type);
 
 struct ConductorFaultOptions {
   double max_arc_m = 3.5;  // the line is inspected up to this arc from the robot (m)

@@ -94,7 +94,8 @@ std::vector<int> FaultLog::Update(int64_t frame, double timestamp_s,
   for (size_t s = 0; s < faults.size(); ++s) {
     const double gate = options_.gate_m + options_.gate_relative * std::max(0.0, faults[s].arc_m);
     for (size_t k = 0; k < faults_.size(); ++k) {
-      if (faults_[k].last.type != faults[s].type) continue;
+      const ConductorFaultType a = faults_[k].last.type, b = faults[s].type;
+      if (a != b && !(IsForeignObject(a) && IsForeignObject(b))) continue;
       const double miss = std::abs(faults[s].arc_m - faults_[k].arc_now_m);
       if (miss <= gate) pairs.emplace_back(miss, s, k);
     }

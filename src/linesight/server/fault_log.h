@@ -7,10 +7,11 @@
 // seen at arc a at time t, it is expected at a - v * (t' - t) at time t', where v is the robot's
 // speed along the line. The caller gives v when it knows it (the base station: the median
 // approach rate of the line's tracked obstacles, which are fixed to the line too); without it the
-// last speed given holds (0 at the start). A sighting continues the kept fault of its type whose
-// expected arc is nearest, within gate_m plus gate_relative of the arc (the arc's noise grows with
-// it, and the gate absorbs an error of the speed between two frames); nearest pairs are matched
-// first and each kept fault takes at most one sighting per frame. Any other sighting is a new
+// last speed given holds (0 at the start). A sighting continues the kept fault of its kind (the
+// same type, or both foreign objects: IsForeignObject) whose expected arc is nearest, within
+// gate_m plus gate_relative of the arc (the arc's noise grows with it, and the gate absorbs an
+// error of the speed between two frames); nearest pairs are matched first and each kept fault
+// takes at most one sighting per frame. Any other sighting is a new
 // fault with the next id. A fault keeps its last sighting (arc, extent, size, confidence, box,
 // crop), its expected arc now (negative once the robot has passed it) and how often it was seen.
 // At most max_faults are kept: beyond that the one seen longest ago is dropped, with its crop.
