@@ -628,6 +628,8 @@ void LineObstacleOptions::Check() const {
               "must be > 0");
   CheckOption(foreign_top_band_m > 0, "LineObstacleOptions.foreign_top_band_m", foreign_top_band_m,
               "must be > 0");
+  CheckOption(foreign_min_fill >= 0 && foreign_min_fill <= 1,
+              "LineObstacleOptions.foreign_min_fill", foreign_min_fill, "must be in [0, 1]");
   CheckOption(foreign_min_below_m > damper_min_below_m, "LineObstacleOptions.foreign_min_below_m",
               foreign_min_below_m, "must be above damper_min_below_m");
 }

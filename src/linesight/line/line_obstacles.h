@@ -120,9 +120,8 @@ struct LineObstacleOptions {
   // Foreign objects (type unknown): on top, above_m >= foreign_min_above_m with top_side_m >=
   // foreign_min_side_m, where top_side_m is measured on the points up to foreign_top_band_m above
   // the axis (an insulator string's clamp, hanger and link reach ~0.17 m before its first disc),
-  // and area_m2 at least foreign_min_fill of its outline across the view, 2 top_side_m wide and
-  // above_m + the conductor's radius
-  // high; hanging, below_m >= foreign_min_below_m.
+  // and area_m2 at least foreign_min_fill of its outline across the view (2 top_side_m wide,
+  // above_m + the conductor's radius high); hanging, below_m >= foreign_min_below_m.
   double foreign_min_above_m = 0.05;
   double foreign_min_side_m = 0.06;
   double foreign_top_band_m = 0.15;
