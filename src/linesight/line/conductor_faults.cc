@@ -576,15 +576,15 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
   }
   out.status = InspectionStatus::kOk;
 
-  // Stretches that belong to a typed fitting: within the margin of it, plus the sampled window's
-  // half-width in metres (a cross-section that reaches into the fitting's image sees it).
-  auto on_fitting = [&](const ConductorFault& f) {
+  // Stretches that belong to an obstacle on the line, a fitting or a foreign object: within the
+  // margin of it, plus the sampled window's half-width in metres (a cross-section that reaches into
+  // the obstacle's image sees it).
+  auto on_obstacle = [&](const ConductorFault& f) {
     const double window_m =
         std::min(o.max_window_px * f.distance_m / g.focal_px,
                  out.radius_m + std::max(o.margin_px * f.distance_m / g.focal_px, o.margin_m));
     const double margin = o.fitting_margin_m + window_m;
     for (const LineObstacle& ob : line.obstacles) {
-      if (ob.type == LineObstacleType::kUnknown) continue;
       if (f.arc_end_m >= ob.arc_m - margin && f.arc_begin_m <= ob.arc_m + ob.length_m + margin) {
         return true;
       }
@@ -650,7 +650,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     const double covered = f.arc_end_m - f.arc_begin_m + half_step(r.first, r.first - 1) +
                            half_step(r.last, r.last + 1);
     if (covered < o.min_swelling_length_m || count < o.min_swelling_samples) continue;
-    if (on_fitting(f)) continue;
+    if (on_obstacle(f)) continue;
     double largest = 0;
     for (int i = r.first; i <= r.last; ++i) {
       if (swollen[i]) {

@@ -26,10 +26,11 @@
 // the inlier samples 0.15-0.6 m of arc away, carried to its depth. A bird-cage is where the extent
 // exceeds the reference by a share of the radius and by the noise (the fit's robust spread) over
 // >= 3 cm of arc and two samples (beyond ~2 m one pixel of the line's image spans several cm).
-// Stretches that overlap a fitting the obstacle finder typed (damper, clamp, insulator) belong to
-// that fitting. Samples without contrast on both sides (the line in front of a tower, the terrain
-// or a bright cloud edge) are not measured, and a stretch without enough measured samples gives no
-// verdict: the report says how much of the line was inspected.
+// Stretches that overlap an obstacle the finder found on the line (a fitting, or a foreign object,
+// whose bulk widens the line's outline too) belong to that obstacle. Samples without contrast on
+// both sides (the line in front of a tower, the terrain or a bright cloud edge) are not measured,
+// and a stretch without enough measured samples gives no verdict: the report says how much of the
+// line was inspected.
 //
 // Foreign objects are the line obstacles whose shape is no fitting's (FindLineObstacles types them
 // "unknown": a mass on top of the line that spreads to its sides without rising into a string of
@@ -99,7 +100,8 @@ struct ConductorFaultOptions {
   int min_baseline_samples = 6;
   // Stretches farther apart than this along the line are separate faults (m).
   double merge_gap_m = 0.03;
-  // A stretch within this arc of a typed fitting belongs to the fitting (m).
+  // A stretch within this arc of an obstacle on the line (a fitting or a foreign object) belongs to
+  // the obstacle (m).
   double fitting_margin_m = 0.05;
   // The band between the expected edges and the extent must lie at the line's disparity where
   // the matcher measured it (within depth_tolerance, at least 1 px), beyond its edge fattening.
