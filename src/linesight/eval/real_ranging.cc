@@ -230,13 +230,9 @@ void DiagnoseRegion(const StereoScene& scene, const RangingPipeline& chain,
                                 100.0 * (r.distance_m / region.truth_m - 1.0))
                   : fmt::format("none ({})", r.reason);
   };
-  // The estimator alone: the ground truth as its disparity map, no refinement on the images.
-  cv::Mat truth = scene.ground_truth.clone();
-  for (int y = 0; y < truth.rows; ++y) {
-    for (int x = 0; x < truth.cols; ++x) {
-      if (!IsValidDisparity(truth.at<float>(y, x))) truth.at<float>(y, x) = kInvalidDisparity;
-    }
-  }
+  // The estimator alone: the ground truth (+inf where unknown, as StereoScene keeps it) as its
+  // disparity map, no refinement on the images.
+  const cv::Mat& truth = scene.ground_truth;
   const RangeResult on_truth = RangeObstacle(truth, chain.geometry(), region.roi, ranging);
   RangingOptions keep_thin = ranging;
   keep_thin.min_body_width_m = 0.0;
