@@ -59,8 +59,9 @@ int RunRender(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--noise-seed", noise_seed, "sensor noise seed (default: derived from --seed)");
   app.add_option("--obstacles", obstacles_text,
-                 "type:distance_m[:conductor],... with type damper|clamp|insulator; distance = "
-                 "nearest visible surface along the rectified optical axis (default "
+                 "type:distance_m[:conductor][:tilt=deg],... with type damper|clamp|insulator; "
+                 "distance = nearest visible surface along the rectified optical axis; tilt = a "
+                 "damaged damper turned about the line (-60..60 deg, > 0 to the right) (default "
                  "damper:1.5,clamp:3,insulator:4.5; 'none' for no obstacles)");
   app.add_option(
       "--defects", defects_text,
@@ -126,6 +127,9 @@ int RunRender(int argc, char** argv) {
                  "and the last obstacle from --seed; per-frame truth under \"defects\" in "
                  "truth.jsonl)")
       ->capture_default_str();
+  app.add_option("--tilted-dampers", sequence_options.tilted_damper_share,
+                 "sequence: share of the dampers turned about the line by 10..25 deg (0..1)")
+      ->capture_default_str();
   app.add_option("--json", json_path, "machine-readable report (- for stdout)");
   return RunCommand(app, argc, argv, [&] {
     if (sequence_frames) {
@@ -152,8 +156,10 @@ int RunRender(int argc, char** argv) {
                    count, sequence.TimestampOf(count - 1), sequence_options.speed_mps,
                    sequence_options.fps, watch.ElapsedMs() / 1000.0, out_dir.c_str());
       for (const sim::SequenceLayoutEntry& e : sequence.layout()) {
-        std::fprintf(stdout, "%-10s centre at %.3f m of arc from the start\n",
-                     sim::ObstacleTypeName(e.type).c_str(), e.arc_m);
+        std::fprintf(
+            stdout, "%-10s centre at %.3f m of arc from the start%s\n",
+            sim::ObstacleTypeName(e.type).c_str(), e.arc_m,
+            e.tilt_deg != 0 ? fmt::format(", tilted {:+.1f} deg", e.tilt_deg).c_str() : "");
       }
       for (const sim::DefectSpec& d : sequence.defects()) {
         std::fprintf(stdout, "%-14s defect centre at %.3f m of arc from the start\n",
@@ -167,6 +173,7 @@ int RunRender(int argc, char** argv) {
         nlohmann::json layout = nlohmann::json::array();
         for (const sim::SequenceLayoutEntry& e : sequence.layout()) {
           layout.push_back({{"type", sim::ObstacleTypeName(e.type)}, {"arc_m", e.arc_m}});
+          if (e.tilt_deg != 0) layout.back()["tilt_deg"] = e.tilt_deg;
         }
         report["layout"] = layout;
         if (!sequence.defects().empty()) {
@@ -182,6 +189,9 @@ int RunRender(int argc, char** argv) {
     }
     if (sequence_options.num_defects != 0) {
       throw UsageError("--num-defects is for --sequence; a still scene takes --defects");
+    }
+    if (sequence_options.tilted_damper_share != 0) {
+      throw UsageError("--tilted-dampers is for --sequence; a still scene takes damper:D:tilt=deg");
     }
     options.seed = seed;
     options.sensor.noise_seed = noise_seed;

@@ -91,6 +91,17 @@ class LineGeometry {
   Vec3 origin0_;
 };
 
+// `f` turned about its along axis by `tilt_deg` (deg): > 0 swings "down" towards -side, i.e. to
+// +x of the camera for a line that runs away from it.
+LocalFrame Tilted(LocalFrame f, double tilt_deg) {
+  if (tilt_deg == 0.0) return f;
+  const double t = tilt_deg * std::numbers::pi / 180.0;
+  const Vec3 down = std::cos(t) * f.down - std::sin(t) * f.side;
+  f.down = down;
+  f.side = Cross(f.along, f.down);
+  return f;
+}
+
 LocalFrame FrameOnConductor(const LineGeometry& line, int conductor, double arc) {
   const double h = line.HorizontalAt(arc);
   LocalFrame f;
@@ -369,7 +380,8 @@ PowerLineSceneModel BuildPowerLineSceneModel(const PowerLineSceneOptions& option
     const int id = static_cast<int>(index) + 1;
     auto build = [&](double arc) {
       std::vector<Shape> shapes;
-      AddObstacle(spec.type, FrameOnConductor(line, spec.conductor, arc), radius, id, &shapes);
+      AddObstacle(spec.type, Tilted(FrameOnConductor(line, spec.conductor, arc), spec.tilt_deg),
+                  radius, id, &shapes);
       return shapes;
     };
     if (spec.arc_m) {  // placed on the line, its distance is whatever it is

@@ -89,6 +89,7 @@ PowerLineSceneRenderer::PowerLineSceneRenderer(const PowerLineSceneOptions& opti
     o.visible_pixels = stats.pixels;
     o.arc_m = model.arc[i];
     o.near_arc_m = o.arc_m + ObstacleAlongExtent(o.type)[0];
+    o.tilt_deg = options.obstacles[i].tilt_deg;
     result.obstacles.push_back(o);
   }
   result.defect_mask = defect_ids;
@@ -168,7 +169,8 @@ nlohmann::json ObstaclesToJson(const std::vector<RenderedObstacle>& obstacles) {
                     {"box", {o.box.x, o.box.y, o.box.width, o.box.height}},
                     {"visible_pixels", o.visible_pixels},
                     {"arc_m", o.arc_m},
-                    {"near_arc_m", o.near_arc_m}});
+                    {"near_arc_m", o.near_arc_m},
+                    {"tilt_deg", o.tilt_deg}});
   }
   return {{"distance_definition", detail::kDistanceDefinition}, {"obstacles", list}};
 }

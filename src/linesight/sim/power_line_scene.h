@@ -158,14 +158,18 @@ struct ObstacleSpec {
   // used; the distance it has is measured (+inf when no pixel of it is visible). This is how a
   // moving sequence places its obstacles. In [-5, 0.9 * span_ahead_m].
   std::optional<double> arc_m;
+  // A damaged damper: turned about the conductor's axis by this angle (deg, -60..60; 0 = its
+  // weights hang straight down, > 0 swings them towards +x of the line's frame, to the right seen
+  // from the robot). Only dampers may be tilted.
+  double tilt_deg = 0.0;
 };
 
 // Extent of an obstacle of `type` along its conductor, relative to its centre (m): {behind, ahead},
 // behind < 0 < ahead. The near end of an obstacle centred at arc s lies at s + behind.
 std::array<double, 2> ObstacleAlongExtent(ObstacleType type);
 
-// "damper:1.5,clamp:3,insulator:4.5" (type:distance_m[:conductor], comma separated). Throws
-// InputError naming the offending entry.
+// "damper:1.5,clamp:3,insulator:4.5,damper:2:tilt=15" (type:distance_m[:conductor][:tilt=deg],
+// comma separated). Throws InputError naming the offending entry.
 std::vector<ObstacleSpec> ParseObstacleSpecs(std::string_view text);
 
 // Defects of conductor 0 (see the top of the file).
@@ -325,6 +329,7 @@ struct RenderedObstacle {
   // travel before it reaches the obstacle.
   double arc_m = 0.0;
   double near_arc_m = 0.0;
+  double tilt_deg = 0.0;  // ObstacleSpec::tilt_deg (a damaged damper)
 };
 
 struct RenderedDefect {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,9 +57,22 @@ std::vector<ObstacleSpec> ParseObstacleSpecs(std::string_view text) {
       if (colon == std::string::npos) break;
       p = colon + 1;
     }
+    // A trailing key=value: the tilt of a damaged damper.
+    std::optional<std::string> tilt;
+    if (parts.size() >= 3 && parts.back().find('=') != std::string::npos) {
+      const std::string& kv = parts.back();
+      const size_t eq = kv.find('=');
+      if (kv.substr(0, eq) != "tilt") {
+        throw InputError(fmt::format("obstacle '{}': unknown key '{}' (expected tilt=deg)", entry,
+                                     kv.substr(0, eq)));
+      }
+      tilt = kv.substr(eq + 1);
+      parts.pop_back();
+    }
     if (parts.size() < 2 || parts.size() > 3) {
       throw InputError(fmt::format(
-          "obstacle '{}': expected type:distance_m[:conductor], e.g. damper:1.5", entry));
+          "obstacle '{}': expected type:distance_m[:conductor][:tilt=deg], e.g. damper:1.5",
+          entry));
     }
     ObstacleSpec spec;
     try {
@@ -88,6 +102,13 @@ std::vector<ObstacleSpec> ParseObstacleSpecs(std::string_view text) {
       }
       spec.conductor = static_cast<int>(conductor);
     }
+    if (tilt) {
+      spec.tilt_deg = parse_number(*tilt, "tilt");
+      if (spec.type != ObstacleType::kDamper || std::fabs(spec.tilt_deg) > 60) {
+        throw InputError(fmt::format(
+            "obstacle '{}': tilt must be in [-60, 60] deg and only a damper may be tilted", entry));
+      }
+    }
     specs.push_back(spec);
     if (end == text.size()) break;
   }
@@ -110,6 +131,10 @@ void PowerLineSceneOptions::Check() const {
                 "must be shorter than 0.9 * span_ahead_m (the conductor ends at the next tower)");
     CheckOption(o.conductor >= 0 && o.conductor < num_conductors, (name + ".conductor").c_str(),
                 o.conductor, "must be a conductor index in [0, num_conductors)");
+    CheckOption(std::isfinite(o.tilt_deg) && std::fabs(o.tilt_deg) <= 60 &&
+                    (o.tilt_deg == 0 || o.type == ObstacleType::kDamper),
+                (name + ".tilt_deg").c_str(), o.tilt_deg,
+                "must be in [-60, 60] deg, and 0 unless the obstacle is a damper");
     if (o.arc_m) {
       CheckOption(std::isfinite(*o.arc_m) && *o.arc_m >= -5 && *o.arc_m <= 0.9 * span_ahead_m,
                   (name + ".arc_m").c_str(), *o.arc_m, "must be in [-5, 0.9 * span_ahead_m] m");

@@ -63,6 +63,8 @@ TEST(PowerLineSceneOptions, RejectsValuesOutsideTheirRange) {
   expect_rejected([](auto& o) { o.obstacles[0].distance_m = 0.1; }, "obstacles[0].distance_m");
   expect_rejected([](auto& o) { o.obstacles[1].distance_m = 75; }, "obstacles[1].distance_m");
   expect_rejected([](auto& o) { o.obstacles[2].conductor = 2; }, "obstacles[2].conductor");
+  expect_rejected([](auto& o) { o.obstacles[0].tilt_deg = 61; }, "obstacles[0].tilt_deg");
+  expect_rejected([](auto& o) { o.obstacles[1].tilt_deg = 5; }, "obstacles[1].tilt_deg");
   expect_rejected([](auto& o) { o.conductor_radius_m = 0.001; }, "conductor_radius_m");
   expect_rejected([](auto& o) { o.conductor_yaw_rad = 0.6; }, "conductor_yaw_rad");
   expect_rejected([](auto& o) { o.tower_offset_x_m = 25; }, "tower_offset_x_m");
@@ -109,6 +111,17 @@ TEST(ParseObstacleSpecs, ParsesAndRejects) {
   EXPECT_THROW(ParseObstacleSpecs("damper:abc"), InputError);
   EXPECT_THROW(ParseObstacleSpecs("damper:1.5:0.5"), InputError);
   EXPECT_THROW(ParseObstacleSpecs("damper:1.5,"), InputError);
+  // A damaged damper's tilt, with or without a conductor index; only dampers tilt.
+  const auto tilted = ParseObstacleSpecs("damper:2:tilt=-15,damper:2.5:0:tilt=10");
+  ASSERT_EQ(tilted.size(), 2u);
+  EXPECT_DOUBLE_EQ(tilted[0].tilt_deg, -15);
+  EXPECT_DOUBLE_EQ(tilted[1].tilt_deg, 10);
+  EXPECT_EQ(tilted[1].conductor, 0);
+  EXPECT_DOUBLE_EQ(specs[0].tilt_deg, 0);
+  EXPECT_THROW(ParseObstacleSpecs("clamp:2:tilt=10"), InputError);
+  EXPECT_THROW(ParseObstacleSpecs("damper:2:tilt=70"), InputError);
+  EXPECT_THROW(ParseObstacleSpecs("damper:2:tilt="), InputError);
+  EXPECT_THROW(ParseObstacleSpecs("damper:2:roll=10"), InputError);
   for (ObstacleType type : AllObstacleTypes()) {
     EXPECT_EQ(ParseObstacleType(ObstacleTypeName(type)), type);
   }
@@ -487,6 +500,38 @@ TEST(RenderPowerLineScene, TowerOffsetMovesTheEndTower) {
   const double centred = tower_centre_u(0.0), moved = tower_centre_u(-8.0);
   // 8 m at about 80 m is about 0.1 rad, 37 px at half size (fx 368); the crossarm stays.
   EXPECT_LT(moved, centred - 15.0) << centred << " " << moved;
+}
+
+// A tilted damper swings its weights about the line to the camera's +x (tilt > 0) or -x; its
+// clamp stays on the conductor, and its truth carries the tilt.
+TEST(RenderPowerLineScene, ATiltedDamperSwingsItsWeightsAside) {
+  auto centre_x = [](double tilt) {
+    PowerLineSceneOptions o;
+    o.sensor.supersampling = 1;
+    o.obstacles = {{ObstacleType::kDamper, 1.5, 0}};
+    o.obstacles[0].arc_m = 1.7;
+    o.obstacles[0].tilt_deg = tilt;
+    const PowerLineScene scene = RenderPowerLineScene(o);
+    EXPECT_EQ(scene.obstacles[0].tilt_deg, tilt);
+    const cv::Rect box = scene.obstacles[0].box;
+    EXPECT_GT(box.area(), 0);
+    // Mean x of the lower half of the damper's pixels (its weights).
+    double sum = 0;
+    int count = 0;
+    for (int y = box.y + box.height / 2; y < box.y + box.height; ++y) {
+      for (int x = box.x; x < box.x + box.width; ++x) {
+        if (scene.obstacle_mask.at<std::uint8_t>(y, x) == 1) {
+          sum += x;
+          ++count;
+        }
+      }
+    }
+    EXPECT_GT(count, 0);
+    return count > 0 ? sum / count : 0.0;
+  };
+  const double straight = centre_x(0), right = centre_x(20), left = centre_x(-20);
+  EXPECT_GT(right, straight + 3);
+  EXPECT_LT(left, straight - 3);
 }
 
 TEST(RenderPowerLineScene, RejectsAnObstacleThatCannotBeSeen) {

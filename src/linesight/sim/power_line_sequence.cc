@@ -38,6 +38,9 @@ void PowerLineSequenceOptions::Check() const {
               "PowerLineSequenceOptions.start_gap_m", start_gap_m, "must be in (end_gap_m, 30] m");
   CheckOption(num_obstacles >= 1 && num_obstacles <= 6, "PowerLineSequenceOptions.num_obstacles",
               num_obstacles, "must be in [1, 6]");
+  CheckOption(tilted_damper_share >= 0 && tilted_damper_share <= 1,
+              "PowerLineSequenceOptions.tilted_damper_share", tilted_damper_share,
+              "must be in [0, 1]");
   CheckOption(num_defects >= 0 && num_defects <= 6, "PowerLineSequenceOptions.num_defects",
               num_defects, "must be in [0, 6]");
   CheckOption(std::isfinite(min_spacing_m) && min_spacing_m >= 0.3,
@@ -67,6 +70,16 @@ PowerLineSequence::PowerLineSequence(const PowerLineSequenceOptions& options) : 
                 random.Uniform() * (options.max_spacing_m - options.min_spacing_m);
   }
   for (int i = 0; i < 6; ++i) phases_.push_back(2.0 * std::numbers::pi * random.Uniform());
+  if (options.tilted_damper_share > 0) {
+    detail::NoiseStream damage(detail::Mix64(options.seed ^ 0xda3a9edULL));
+    for (SequenceLayoutEntry& entry : layout_) {
+      if (entry.type != ObstacleType::kDamper) continue;
+      const double pick = damage.Uniform(), size = damage.Uniform(), side = damage.Uniform();
+      if (pick < options.tilted_damper_share) {
+        entry.tilt_deg = (side < 0.5 ? -1.0 : 1.0) * (10.0 + 15.0 * size);
+      }
+    }
+  }
   frames_ =
       1 + static_cast<int>(std::floor(
               (options.start_gap_m - options.end_gap_m) / options.speed_mps * options.fps + 1e-9));
@@ -110,6 +123,7 @@ PowerLineSceneOptions PowerLineSequence::FrameOptions(int index) const {
     ObstacleSpec spec;
     spec.type = entry.type;
     spec.arc_m = entry.arc_m - travelled;
+    spec.tilt_deg = entry.tilt_deg;
     o.obstacles.push_back(spec);
   }
   o.defects = defects_;
@@ -131,6 +145,7 @@ nlohmann::json SequenceFrameTruthToJson(int index, double timestamp_s, double tr
                             {"box", {o.box.x, o.box.y, o.box.width, o.box.height}},
                             {"visible_pixels", o.visible_pixels}};
     entry["distance_m"] = std::isfinite(o.distance_m) ? nlohmann::json(o.distance_m) : nullptr;
+    if (o.tilt_deg != 0) entry["tilt_deg"] = o.tilt_deg;
     list.push_back(entry);
   }
   nlohmann::json truth = {{"frame", index},
@@ -170,6 +185,7 @@ void WritePowerLineSequence(const std::filesystem::path& dir, const PowerLineSeq
   nlohmann::json layout = nlohmann::json::array();
   for (const SequenceLayoutEntry& e : sequence.layout()) {
     layout.push_back({{"type", ObstacleTypeName(e.type)}, {"arc_m", e.arc_m}});
+    if (e.tilt_deg != 0) layout.back()["tilt_deg"] = e.tilt_deg;
   }
   nlohmann::json description = {{"seed", o.seed},
                                 {"frames", count},
@@ -180,6 +196,7 @@ void WritePowerLineSequence(const std::filesystem::path& dir, const PowerLineSeq
                                 {"pitch_jitter_deg", o.pitch_jitter_deg},
                                 {"roll_jitter_deg", o.roll_jitter_deg},
                                 {"bounce_m", o.bounce_m},
+                                {"tilted_damper_share", o.tilted_damper_share},
                                 {"supersampling", o.scene.sensor.supersampling},
                                 {"layout", layout}};
   if (!sequence.defects().empty()) {

@@ -50,6 +50,10 @@ struct PowerLineSequenceOptions {
   // robot's start to the centre of the last obstacle) drawn by RandomDefects from a seed derived
   // from `seed`.
   int num_defects = 0;
+  // Share of the dampers (0..1) that are damaged: turned about the line by 10..25 deg to either
+  // side (ObstacleSpec::tilt_deg), drawn from a seed derived from `seed` (so the layout, the motion
+  // and the defects do not depend on it).
+  double tilted_damper_share = 0.0;
   // Clear arc between one obstacle's far end and the next one's near end (m), drawn uniformly.
   double min_spacing_m = 1.0;
   double max_spacing_m = 2.5;
@@ -63,7 +67,8 @@ struct PowerLineSequenceOptions {
 
 struct SequenceLayoutEntry {
   ObstacleType type = ObstacleType::kDamper;
-  double arc_m = 0.0;  // arc of its centre from the robot's START position (m)
+  double arc_m = 0.0;     // arc of its centre from the robot's START position (m)
+  double tilt_deg = 0.0;  // a damaged damper's tilt (ObstacleSpec::tilt_deg)
 };
 
 class PowerLineSequence {
@@ -94,9 +99,10 @@ class PowerLineSequence {
 
 // Truth of one frame as JSON: {"frame", "timestamp_s", "travelled_m", "obstacles": [{"id",
 // "type", "arc_distance_m" (near end), "distance_m" (straight, null when not visible), "box",
-// "visible_pixels"}]}, and when the scene has defects "defects": [{"id", "type", "arc_distance_m"
-// (centre, from the robot), "arc_begin_m", "arc_end_m" (its extent, from the robot), "size_m",
-// "distance_m" (null when not visible), "box", "visible_pixels"}].
+// "visible_pixels", and "tilt_deg" for a tilted damper}]}, and when the scene has defects
+// "defects": [{"id", "type", "arc_distance_m" (centre, from the robot), "arc_begin_m", "arc_end_m"
+// (its extent, from the robot), "size_m", "distance_m" (null when not visible), "box",
+// "visible_pixels"}].
 nlohmann::json SequenceFrameTruthToJson(int index, double timestamp_s, double travelled_m,
                                         const PowerLineScene& scene);
 

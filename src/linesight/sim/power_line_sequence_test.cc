@@ -181,6 +181,44 @@ TEST(PowerLineSequence, DefectsComeWithTruthAndLeaveTheObstaclesAlone) {
   EXPECT_FALSE(plain_truth.contains("defects"));
 }
 
+// With tilted_damper_share 1 every damper of the layout is turned by 10..25 deg, and nothing else
+// of the sequence changes; the frames and their truth carry the tilt.
+TEST(PowerLineSequence, TiltedDampersLeaveTheRestAlone) {
+  PowerLineSequenceOptions o = FastSequence(13);
+  const PowerLineSequence plain(o);
+  o.tilted_damper_share = 1.0;
+  const PowerLineSequence damaged(o);
+  ASSERT_EQ(damaged.layout().size(), plain.layout().size());
+  int dampers = 0;
+  for (size_t i = 0; i < plain.layout().size(); ++i) {
+    const SequenceLayoutEntry& e = damaged.layout()[i];
+    EXPECT_EQ(e.type, plain.layout()[i].type);
+    EXPECT_EQ(e.arc_m, plain.layout()[i].arc_m);
+    EXPECT_EQ(plain.layout()[i].tilt_deg, 0);
+    if (e.type == ObstacleType::kDamper) {
+      ++dampers;
+      EXPECT_GE(std::fabs(e.tilt_deg), 10);
+      EXPECT_LE(std::fabs(e.tilt_deg), 25);
+    } else {
+      EXPECT_EQ(e.tilt_deg, 0);
+    }
+  }
+  ASSERT_GT(dampers, 0);
+  const PowerLineSceneOptions a = plain.FrameOptions(5), b = damaged.FrameOptions(5);
+  EXPECT_EQ(a.conductor_pitch_rad, b.conductor_pitch_rad);
+  EXPECT_EQ(a.sensor.noise_seed, b.sensor.noise_seed);
+  ASSERT_EQ(a.obstacles.size(), b.obstacles.size());
+  for (size_t i = 0; i < b.obstacles.size(); ++i) {
+    EXPECT_EQ(b.obstacles[i].tilt_deg, damaged.layout()[i].tilt_deg);
+  }
+  const PowerLineScene scene = damaged.Render(0);
+  const nlohmann::json truth =
+      SequenceFrameTruthToJson(0, damaged.TimestampOf(0), damaged.TravelledAt(0), scene);
+  for (size_t i = 0; i < scene.obstacles.size(); ++i) {
+    EXPECT_EQ(truth["obstacles"][i].contains("tilt_deg"), damaged.layout()[i].tilt_deg != 0);
+  }
+}
+
 TEST(PowerLineSequence, RejectsBadOptionsNamingTheField) {
   auto expect_rejected = [](auto change, const std::string& field) {
     PowerLineSequenceOptions o;
@@ -198,6 +236,7 @@ TEST(PowerLineSequence, RejectsBadOptionsNamingTheField) {
   expect_rejected([](auto& o) { o.num_obstacles = 9; }, "num_obstacles");
   expect_rejected([](auto& o) { o.num_defects = 7; }, "num_defects");
   expect_rejected([](auto& o) { o.num_defects = -1; }, "num_defects");
+  expect_rejected([](auto& o) { o.tilted_damper_share = 1.5; }, "tilted_damper_share");
   expect_rejected(
       [](auto& o) {
         o.num_obstacles = 1;
