@@ -29,7 +29,7 @@ constexpr Subcommand kSubcommands[] = {
     {"range", linesight::cli::RunRange,
      "distance +- sigma to obstacles in ROIs or found automatically"},
     {"inspect", linesight::cli::RunInspect,
-     "the robot's conductor: radius profile, bird-caging and foreign objects along the line"},
+     "the robot's conductor: radius profile, bird-caging, foreign objects and tilted dampers"},
     {"bench", linesight::cli::RunBench,
      "throughput of sgm / isgm vs OpenCV StereoSGBM (ms, fps, MDE/s, memory)"},
     {"render", linesight::cli::RunRender,

@@ -1,5 +1,6 @@
 // linesight inspect: the robot's conductor's radius profile and the bird-caging found in it, in one
 // pair or a sequence of pairs.
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 
@@ -25,7 +26,8 @@ int RunInspect(int argc, char** argv) {
   CLI::App app{
       "The conductor the robot rides on, inspected: its radius profile along the line from the "
       "image edges in both views, bird-caging (a swelling of the strands) and foreign objects on "
-      "the line (a nest on top, a sheet hanging from it) with their positions along the line. "
+      "the line (a nest on top, a sheet hanging from it) with their positions along the line, and "
+      "the dampers' roll about the line (a tilted damper is a fault). "
       "--left/--right take one pair or two globs of a sequence (paired in sorted "
       "order; the conductor is tracked from frame to frame).",
       "inspect"};
@@ -93,6 +95,9 @@ int RunInspect(int argc, char** argv) {
       nlohmann::json j = inspection.ToJson(with_profile);
       j["left"] = lefts[i].string();
       j["right"] = rights[i].string();
+      // The fittings the inspection checked (and the foreign objects), as FindLineObstacles found
+      // them.
+      j["obstacles"] = line.ToJson()["obstacles"];
       if (inspection.status == InspectionStatus::kOk) {
         out << fmt::format(
             "{}: conductor radius {:.1f} mm, inspected {:.2f} m of line up to {:.2f} m, "
@@ -103,13 +108,25 @@ int RunInspect(int argc, char** argv) {
         out << fmt::format("{}: {}: {}\n", lefts[i].filename().string(),
                            InspectionStatusName(inspection.status), inspection.reason);
       }
+      for (const FittingState& state : inspection.fittings) {
+        out << (std::isfinite(state.roll_deg)
+                    ? fmt::format("  damper at {:.2f} m along the line: roll {:+.1f} deg\n",
+                                  state.arc_m, state.roll_deg)
+                    : fmt::format("  damper at {:.2f} m along the line: roll not measured ({} "
+                                  "cross-sections of the line beside it)\n",
+                                  state.arc_m, state.axis_samples));
+      }
       for (size_t k = 0; k < inspection.faults.size(); ++k) {
         const ConductorFault& f = inspection.faults[k];
         out << fmt::format(
-            "  {:<15} {:.2f}..{:.2f} m along the line, {:.2f} m away, size {:.1f} mm, "
+            "  {:<15} {:.2f}..{:.2f} m along the line, {:.2f} m away, size {:.1f} mm{}, "
             "confidence {:.2f}\n",
             ConductorFaultTypeName(f.type), f.arc_begin_m, f.arc_end_m, f.distance_m,
-            1000 * f.size_m, f.confidence);
+            1000 * f.size_m,
+            f.type == ConductorFaultType::kDamperTilted
+                ? fmt::format(" (roll {:+.1f} deg)", f.roll_deg)
+                : "",
+            f.confidence);
         if (!crops_dir.empty() && !f.box.empty()) {
           const int pad = std::max(8, f.box.width / 2);
           const cv::Rect crop =

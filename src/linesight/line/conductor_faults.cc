@@ -3,16 +3,23 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include <fmt/format.h>
 #include <opencv2/imgproc.hpp>
 
+#include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
 
 namespace linesight {
 namespace {
 
 constexpr double kStep = 0.25;  // sampling step across the line (px)
+// The band's disparity from its edges needs them to cross the rows: |x of the unit normal| >= this.
+constexpr double kMinNormalX = 0.3;
+constexpr int kAxisRounds = 4;  // measurements of the right view's band for the axis's disparity
+// How far along the line an axis point may lie from its cross-section's point of the model (m).
+constexpr double kMaxAxisArcShiftM = 0.1;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -292,7 +299,162 @@ void AddForeignObjects(const LineObstacles& line, const ConductorFaultOptions& o
   }
 }
 
+// The axis's offset from the model at `arc` (m), from samples (arcs[i], offsets[i]): the model's
+// axis is off by an amount that changes along the line (it is a straight fit to a biased
+// disparity), so a robust straight line through the samples, when they span at least
+// kMinAxisSpanM of arc (3 rounds of least squares, dropping samples beyond 3 robust sigmas and
+// 2 mm); their median otherwise. `spread`: the samples' robust sigma about it (m).
+double OffsetAt(const std::vector<double>& arcs, const std::vector<double>& offsets, double arc,
+                double* spread) {
+  constexpr double kMinAxisSpanM = 0.2;
+  const auto [lo, hi] = std::minmax_element(arcs.begin(), arcs.end());
+  double a = Median(offsets), b = 0;
+  auto robust_spread = [&] {
+    std::vector<double> residuals;
+    for (size_t i = 0; i < arcs.size(); ++i) {
+      residuals.push_back(std::fabs(offsets[i] - a - b * (arcs[i] - arc)));
+    }
+    return 1.4826 * Median(residuals);
+  };
+  if (*hi - *lo < kMinAxisSpanM || arcs.size() < 5) {
+    *spread = robust_spread();
+    return a;
+  }
+  std::vector<char> in(arcs.size(), 1);
+  for (int round = 0; round < 3; ++round) {
+    double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (size_t i = 0; i < arcs.size(); ++i) {
+      if (!in[i]) continue;
+      const double x = arcs[i] - arc;
+      n += 1;
+      sx += x;
+      sy += offsets[i];
+      sxx += x * x;
+      sxy += x * offsets[i];
+    }
+    const double det = n * sxx - sx * sx;
+    if (n < 3 || det <= 1e-12) break;
+    a = (sxx * sy - sx * sxy) / det;
+    b = (n * sxy - sx * sy) / det;
+    std::vector<double> residuals;
+    for (size_t i = 0; i < arcs.size(); ++i) {
+      residuals.push_back(std::fabs(offsets[i] - a - b * (arcs[i] - arc)));
+    }
+    const double limit = std::max(0.002, 3 * 1.4826 * Median(residuals));
+    for (size_t i = 0; i < arcs.size(); ++i) in[i] = residuals[i] <= limit;
+  }
+  *spread = robust_spread();
+  return a;
+}
+
+// The state of damper `index` of `line`: the roll of its points under the line (on the matcher's
+// checked map, within damper_reach_m of the axis) about the axis that the cross-sections between
+// the robot and the damper placed (RadiusSample::axis), within axis_reach_m of arc before its near
+// end, carried to its centre by their straight line. The near side of the line is seen larger and
+// nearer than the far side, where the edges soon become too thin to place an axis (on the tuning
+// sequences the far side's axes drifted by centimetres beyond 3 m). Cross-sections whose window
+// reaches into the damper see its body, not the line's edges: the nearest ones are
+// fitting_margin_m plus the window's half-width (margin_m and the radius) away.
+FittingState CheckDamper(const LineObstacles& line, int index,
+                         const std::vector<RadiusSample>& profile, const cv::Mat& disparity,
+                         const CurveLocator& locator, const StereoGeometry& g, double radius_m,
+                         const ConductorFaultOptions& o) {
+  const LineObstacle& ob = line.obstacles[index];
+  FittingState state;
+  state.obstacle = index;
+  state.arc_m = ob.arc_m;
+  state.distance_m = ob.distance_m;
+  state.roll_deg = std::numeric_limits<double>::quiet_NaN();
+  const double clear = o.fitting_margin_m + o.margin_m + radius_m;
+  const double begin = ob.arc_m, end = ob.arc_m + ob.length_m;
+  std::vector<double> axis_arc, axis_down, axis_side;
+  for (const RadiusSample& s : profile) {
+    if (!s.axis_measured) continue;
+    if (s.arc_m < begin - o.axis_reach_m || s.arc_m > begin - clear) continue;
+    const LinePosition at = locator.Locate(s.axis);
+    // An axis far along the line from its cross-section is a disparity gone astray.
+    if (std::fabs(at.arc_m - s.arc_m) > kMaxAxisArcShiftM) continue;
+    axis_arc.push_back(at.arc_m);
+    axis_down.push_back(at.down_m);
+    axis_side.push_back(at.side_m);
+  }
+  state.axis_samples = static_cast<int>(axis_down.size());
+  if (state.axis_samples < 3) return state;
+  // The model's offset changes along the line by ~1 cm per metre: cross-sections that all lie far
+  // before the damper say too little about the axis at it.
+  if (begin - *std::max_element(axis_arc.begin(), axis_arc.end()) > o.max_axis_gap_m) {
+    state.axis_samples = 0;
+    return state;
+  }
+  const double centre = 0.5 * (begin + end);
+  double spread_down = 0, spread_side = 0;
+  const double axis_down_m = OffsetAt(axis_arc, axis_down, centre, &spread_down);
+  const double axis_side_m = OffsetAt(axis_arc, axis_side, centre, &spread_side);
+  // Cross-sections that disagree with each other measured something else than the line's edges
+  // (a defect or another object beside the line, the horizon): the axis is not known there.
+  state.axis_spread_m = std::max(spread_down, spread_side);
+  if (state.axis_spread_m > o.max_axis_spread_m) return state;
+  std::vector<double> roll;
+  for (int y = 0; y < ob.box.height; ++y) {
+    const std::uint8_t* m = ob.mask.ptr<std::uint8_t>(y);
+    const float* d = disparity.ptr<float>(ob.box.y + y) + ob.box.x;
+    for (int x = 0; x < ob.box.width; ++x) {
+      if (m[x] == 0 || !IsValidDisparity(d[x]) || d[x] + g.disparity_offset_px <= 0) continue;
+      const LinePosition at =
+          locator.Locate(PixelAtDepth(g, ob.box.x + x, ob.box.y + y, g.DepthFromDisparity(d[x])));
+      const double down = at.down_m - axis_down_m, side = at.side_m - axis_side_m;
+      // side runs along tangent x down: to the camera's -x for a line that runs away from it.
+      if (down >= radius_m + o.roll_min_below_m && std::hypot(down, side) <= o.damper_reach_m) {
+        roll.push_back(std::atan2(-side, down));
+      }
+    }
+  }
+  if (static_cast<int>(roll.size()) >= o.roll_min_points) {
+    state.roll_deg = Median(roll) * 180.0 / std::numbers::pi;
+  }
+  return state;
+}
+
+// The dampers' states (InspectConductor's `fittings`) and a fault for each one turned beyond
+// max_damper_roll_deg. A damper the ranging chain could not measure is not checked (its pixels are
+// as often a stray piece of the background as a fitting).
+void CheckDampers(const LineObstacles& line, const std::vector<RadiusSample>& profile,
+                  const cv::Mat& disparity, const CurveLocator& locator, const StereoGeometry& g,
+                  double radius_m, const ConductorFaultOptions& o, ConductorInspection* out) {
+  for (size_t i = 0; i < line.obstacles.size(); ++i) {
+    const LineObstacle& ob = line.obstacles[i];
+    if (ob.type != LineObstacleType::kDamper || !ob.range.ok() || ob.arc_m > o.max_arc_m) {
+      continue;
+    }
+    const FittingState state =
+        CheckDamper(line, static_cast<int>(i), profile, disparity, locator, g, radius_m, o);
+    out->fittings.push_back(state);
+    if (!(std::fabs(state.roll_deg) >= o.max_damper_roll_deg)) continue;
+    ConductorFault f;
+    f.type = ConductorFaultType::kDamperTilted;
+    f.arc_begin_m = ob.arc_m;
+    f.arc_end_m = ob.arc_m + ob.length_m;
+    f.arc_m = 0.5 * (f.arc_begin_m + f.arc_end_m);
+    f.distance_m = ob.distance_m;
+    f.roll_deg = state.roll_deg;
+    f.size_m =
+        (ob.below_m + radius_m) * std::sin(std::fabs(state.roll_deg) * std::numbers::pi / 180);
+    f.confidence = ob.confidence;
+    f.box = ob.box;
+    out->faults.push_back(f);
+  }
+}
+
 }  // namespace
+
+nlohmann::json FittingState::ToJson() const {
+  return {{"obstacle", obstacle},
+          {"arc_m", arc_m},
+          {"distance_m", distance_m},
+          {"roll_deg", std::isfinite(roll_deg) ? nlohmann::json(roll_deg) : nullptr},
+          {"axis_samples", axis_samples},
+          {"axis_spread_m", axis_spread_m}};
+}
 
 std::string ConductorFaultTypeName(ConductorFaultType type) {
   switch (type) {
@@ -302,6 +464,8 @@ std::string ConductorFaultTypeName(ConductorFaultType type) {
       return "nest";
     case ConductorFaultType::kSheet:
       return "sheet";
+    case ConductorFaultType::kDamperTilted:
+      return "damper_tilted";
   }
   return "unknown";
 }
@@ -360,17 +524,34 @@ void ConductorFaultOptions::Check() const {
               min_swelling_samples, "must be >= 1");
   CheckOption(depth_tolerance > 0 && depth_tolerance < 1, "ConductorFaultOptions.depth_tolerance",
               depth_tolerance, "must be in (0, 1)");
+  CheckOption(roll_min_below_m >= 0 && roll_min_below_m <= 1,
+              "ConductorFaultOptions.roll_min_below_m", roll_min_below_m, "must be in [0, 1] m");
+  CheckOption(roll_min_points >= 1, "ConductorFaultOptions.roll_min_points", roll_min_points,
+              "must be >= 1");
+  CheckOption(axis_reach_m > 0 && axis_reach_m <= 5, "ConductorFaultOptions.axis_reach_m",
+              axis_reach_m, "must be in (0, 5] m");
+  CheckOption(max_axis_gap_m > 0, "ConductorFaultOptions.max_axis_gap_m", max_axis_gap_m,
+              "must be > 0 m");
+  CheckOption(damper_reach_m > 0 && damper_reach_m <= 1, "ConductorFaultOptions.damper_reach_m",
+              damper_reach_m, "must be in (0, 1] m");
+  CheckOption(max_axis_spread_m > 0, "ConductorFaultOptions.max_axis_spread_m", max_axis_spread_m,
+              "must be > 0 m");
+  CheckOption(max_damper_roll_deg > 0 && max_damper_roll_deg < 90,
+              "ConductorFaultOptions.max_damper_roll_deg", max_damper_roll_deg,
+              "must be in (0, 90) deg");
 }
 
 nlohmann::json ConductorFault::ToJson() const {
-  return {{"type", ConductorFaultTypeName(type)},
-          {"arc_m", arc_m},
-          {"arc_begin_m", arc_begin_m},
-          {"arc_end_m", arc_end_m},
-          {"distance_m", distance_m},
-          {"size_m", size_m},
-          {"confidence", confidence},
-          {"box", {box.x, box.y, box.width, box.height}}};
+  nlohmann::json j = {{"type", ConductorFaultTypeName(type)},
+                      {"arc_m", arc_m},
+                      {"arc_begin_m", arc_begin_m},
+                      {"arc_end_m", arc_end_m},
+                      {"distance_m", distance_m},
+                      {"size_m", size_m},
+                      {"confidence", confidence},
+                      {"box", {box.x, box.y, box.width, box.height}}};
+  if (type == ConductorFaultType::kDamperTilted) j["roll_deg"] = roll_deg;
+  return j;
 }
 
 nlohmann::json ConductorInspection::ToJson(bool with_profile) const {
@@ -382,6 +563,8 @@ nlohmann::json ConductorInspection::ToJson(bool with_profile) const {
                       {"faults", nlohmann::json::array()}};
   if (!reason.empty()) j["reason"] = reason;
   for (const ConductorFault& f : faults) j["faults"].push_back(f.ToJson());
+  j["fittings"] = nlohmann::json::array();
+  for (const FittingState& s : fittings) j["fittings"].push_back(s.ToJson());
   if (with_profile) {
     nlohmann::json p = nlohmann::json::array();
     for (const RadiusSample& s : profile) {
@@ -394,6 +577,8 @@ nlohmann::json ConductorInspection::ToJson(bool with_profile) const {
                    {"extent_m", s.extent_m},
                    {"baseline_m", s.baseline_m},
                    {"contrast", s.contrast},
+                   {"axis", s.axis_measured ? nlohmann::json({s.axis.x, s.axis.y, s.axis.z})
+                                            : nlohmann::json(nullptr)},
                    {"protrusion_px", {s.protrusion_px[0], s.protrusion_px[1]}}});
     }
     j["profile"] = std::move(p);
@@ -476,10 +661,37 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
         }
       }
     }
+    const double agreement = std::max(1.0, 0.15 * expected_px);
+    if (l.measured && r.measured && std::fabs(l.radius_px - r.radius_px) <= agreement) {
+      // The middle of the band in each view is the axis's image; the right view's lies on the
+      // row of the left's at the axis's disparity d + dd, where the two middles' offsets along
+      // their normals agree (a band along the rows says nothing about its disparity).
+      // The model's disparity may be off by several pixels (see RadiusSample::axis): the right
+      // view is measured again where the first estimate puts the band, until it moves < 0.1 px.
+      const double mid_l = 0.5 * (l.edge_px[0] - l.edge_px[1]);
+      double mid_r = 0.5 * (r.edge_px[0] - r.edge_px[1]);
+      if (std::fabs(nr.x) >= kMinNormalX) {
+        double axis_d = d;
+        bool found = true;
+        for (int round = 0; round < kAxisRounds && found; ++round) {
+          const double step = (mid_l * n.dot(nr) - mid_r) / nr.x;
+          axis_d += step;
+          if (std::fabs(step) < 0.1 || !(axis_d + g.disparity_offset_px > 0.5)) break;
+          const CrossSection again = MeasureCrossSection(
+              right, p - cv::Point2d(axis_d, 0), nr, expected_px, window, strand_px, o, &profile);
+          found = again.measured && std::fabs(l.radius_px - again.radius_px) <= agreement;
+          mid_r = 0.5 * (again.edge_px[0] - again.edge_px[1]);
+        }
+        const cv::Point2d q = p + mid_l * n;
+        if (found && axis_d + g.disparity_offset_px > 0.5) {
+          s.axis_measured = true;
+          s.axis = PixelAtDepth(g, q.x, q.y, g.DepthFromDisparity(axis_d));
+        }
+      }
+    }
     // Both views must agree on the extent: an edge pulled by the background (the horizon, a
     // structure behind the line, the ground's texture) lies elsewhere in the other view, while the
     // conductor's outline, swollen or not, is at the line's depth in both.
-    const double agreement = std::max(1.0, 0.15 * expected_px);
     auto width = [](const double* e) { return e[0] + e[1]; };
     if (l.extent_found && r.extent_found && band_at_line &&
         std::fabs(width(l.extent_px) - width(r.extent_px)) <= 2 * agreement) {
@@ -510,6 +722,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
       if (s.arc_m >= ob.arc_m - margin && s.arc_m <= ob.arc_m + ob.length_m + margin) {
         s.measured = false;
         s.radius_measured = false;
+        s.axis_measured = false;
       }
     }
   }
@@ -529,6 +742,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
         "against the background)",
         measured_count);
     AddForeignObjects(line, o, &out.faults);
+    CheckDampers(line, out.profile, disparity, locator, g, nominal_radius, o, &out);
     return out;
   }
   out.radius_m = Median(radii);
@@ -661,6 +875,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     out.faults.push_back(f);
   }
   AddForeignObjects(line, o, &out.faults);
+  CheckDampers(line, out.profile, disparity, locator, g, out.radius_m, o, &out);
 
   std::sort(out.faults.begin(), out.faults.end(),
             [](const ConductorFault& a, const ConductorFault& b) {

@@ -35,6 +35,9 @@
 // Foreign objects are the line obstacles whose shape is no fitting's (FindLineObstacles types them
 // "unknown": a mass on top of the line that spreads to its sides without rising into a string of
 // discs, or something hanging deeper than a damper's weights): "nest" on top, "sheet" hanging.
+// Damaged fittings: every damper on the line is checked for its roll about the conductor
+// (FittingState), measured about the axis that both views' band edges place beside it (the model's
+// own axis is ~1 cm off); one turned by more than max_damper_roll_deg is a "damper_tilted" fault.
 // Broken strands and hanging strings (a few millimetres thick, thinner than any body) are not
 // reported yet (on the tuning sequences the protrusions found 1 of 31 broken strands); a bird-cage
 // where the line crosses the horizon or passes in front of ground of its own grey is missed
@@ -58,8 +61,10 @@ enum class ConductorFaultType {
   // top of the line (a bird's nest) or hanging from it (a plastic sheet, a rag).
   kNest,
   kSheet,
+  // A damaged fitting: a damper turned about the line (its weights no longer hang straight down).
+  kDamperTilted,
 };
-// "birdcage", "nest", "sheet" (the synthetic scene's defect names).
+// "birdcage", "nest", "sheet" (the synthetic scene's defect names), "damper_tilted".
 std::string ConductorFaultTypeName(ConductorFaultType type);
 // Whether a fault is a foreign object (nest, sheet) rather than damage to the conductor. One object
 // may read as a nest in one frame and a sheet in the next (its extents above and below the line
@@ -107,6 +112,23 @@ struct ConductorFaultOptions {
   // the matcher measured it (within depth_tolerance, at least 1 px), beyond its edge fattening.
   double fattening_px = 4.0;
   double depth_tolerance = 0.05;
+  // Dampers (FittingState): the roll of the points at least roll_min_below_m under the conductor's
+  // bottom (a damper's clamp grips the line 1 cm deep; its drop, messenger and weights hang 2-10 cm
+  // under it), at least roll_min_points of them, about the axis measured within axis_reach_m of
+  // arc before the damper's near end (at least 3 cross-sections). A damper turned by more than
+  // max_damper_roll_deg is a fault.
+  double roll_min_below_m = 0.02;
+  int roll_min_points = 12;
+  double axis_reach_m = 1.0;
+  double max_damper_roll_deg = 7.0;
+  // Only points within damper_reach_m of the axis are the damper's (its weights' bottom hangs
+  // 0.116 m under it; a tilted one's reaches no farther): a defect or another object next to it in
+  // the image may be part of its pixels. The cross-sections' axes must agree within
+  // max_axis_spread_m (robust sigma about their straight line) or the damper is not checked.
+  double damper_reach_m = 0.16;
+  double max_axis_spread_m = 0.004;
+  // ... and the nearest of them must lie within max_axis_gap_m of arc before the damper's near end.
+  double max_axis_gap_m = 0.4;
 
   void Check() const;
 };
@@ -130,6 +152,26 @@ struct RadiusSample {
   // Protrusion beyond each edge in the image (px; 0 = none). Side 0 is the image side towards +v
   // (below the line for an upright camera), side 1 the other.
   double protrusion_px[2] = {0, 0};
+  // The axis from both views' half-way crossings (rectified left frame, m): the middle of the band
+  // is the axis's image in each view, and their shift along the row is the axis's disparity. The
+  // matcher's disparity on a thin, receding tube is pulled towards the background behind it (its
+  // windows hold both), which puts the model's axis ~1 cm off where the line passes beside the
+  // camera; the band's edges are the strongest features it has.
+  bool axis_measured = false;
+  cv::Point3d axis;
+};
+
+// The state of a fitting on the line (a damper): how far it is turned about the line.
+struct FittingState {
+  int obstacle = 0;  // index into LineObstacles::obstacles
+  double arc_m = 0, distance_m = 0;
+  // Roll of what hangs below the line about its axis (deg; > 0 to the right seen from the robot,
+  // i.e. to +x of the camera; NaN when not measured). A sound damper's weights hang straight down:
+  // 0. Measured from the camera's vertical, so a rolled rig reads its own roll on every fitting.
+  double roll_deg = 0;
+  int axis_samples = 0;      // cross-sections that placed the axis beside it (0: not measured)
+  double axis_spread_m = 0;  // their robust spread about their straight line (m)
+  nlohmann::json ToJson() const;
 };
 
 struct ConductorFault {
@@ -139,7 +181,9 @@ struct ConductorFault {
   double distance_m = 0;                  // depth of the line there (m)
   // Birdcage: the largest increase of the extent over the clean conductor's (m). Nest: its largest
   // extent (above the line, along it, across it); sheet: how far it hangs or its length (m).
+  // Tilted damper: how far its lowest part has swung aside (m).
   double size_m = 0;
+  double roll_deg = 0;    // tilted damper: FittingState::roll_deg
   double confidence = 0;  // 0..1: the evidence above its threshold and the share measured
   cv::Rect box;           // rectified left image
   nlohmann::json ToJson() const;
@@ -161,6 +205,7 @@ struct ConductorInspection {
   double inspected_to_m = 0;  // the farthest measured arc (m)
   std::vector<RadiusSample> profile;
   std::vector<ConductorFault> faults;  // nearest first
+  std::vector<FittingState> fittings;  // the dampers on the line up to max_arc_m
   nlohmann::json ToJson(bool with_profile = false) const;
 };
 

@@ -519,7 +519,10 @@ nlohmann::json BaseStation::LogFaults(const ConductorInspection& inspection,
       "faults: the faults seen recently, the most recently seen first, merged over frames by their "
       "arc along the line; arc_m: arc from the robot to the fault's centre at its last sighting "
       "(m); arc_now_m: where it is expected now (m, < 0 = passed); length_m: its extent along the "
-      "line; size_m: the radius increase (m); in_frame: this frame's faults, with the id of the "
+      "line; size_m: its size (m): a bird-cage's radius increase, a nest's or sheet's extent, how "
+      "far "
+      "a tilted damper's weights have swung aside (roll_deg: its roll about the line, deg); "
+      "in_frame: this frame's faults, with the id of the "
       "kept fault each was merged into";
   return j;
 }

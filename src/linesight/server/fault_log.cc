@@ -28,25 +28,27 @@ void FaultLogOptions::Check() const {
 
 nlohmann::json LoggedFault::ToJson(const std::string& crop_url_prefix) const {
   const cv::Rect& b = last.box;
-  return {{"id", id},
-          {"type", ConductorFaultTypeName(last.type)},
-          {"arc_m", last.arc_m},
-          {"arc_now_m", arc_now_m},
-          {"length_m", last.arc_end_m - last.arc_begin_m},
-          {"arc_begin_m", last.arc_begin_m},
-          {"arc_end_m", last.arc_end_m},
-          {"distance_m", last.distance_m},
-          {"size_m", last.size_m},
-          {"confidence", last.confidence},
-          {"max_confidence", max_confidence},
-          {"box", {b.x, b.y, b.width, b.height}},
-          {"sightings", sightings},
-          {"first_seen_frame", first_seen_frame},
-          {"last_seen_frame", last_seen_frame},
-          {"first_seen_s", first_seen_s},
-          {"last_seen_s", last_seen_s},
-          {"crop", crop ? nlohmann::json(fmt::format("{}{}.jpg", crop_url_prefix, id))
-                        : nlohmann::json(nullptr)}};
+  nlohmann::json j = {{"id", id},
+                      {"type", ConductorFaultTypeName(last.type)},
+                      {"arc_m", last.arc_m},
+                      {"arc_now_m", arc_now_m},
+                      {"length_m", last.arc_end_m - last.arc_begin_m},
+                      {"arc_begin_m", last.arc_begin_m},
+                      {"arc_end_m", last.arc_end_m},
+                      {"distance_m", last.distance_m},
+                      {"size_m", last.size_m},
+                      {"confidence", last.confidence},
+                      {"max_confidence", max_confidence},
+                      {"box", {b.x, b.y, b.width, b.height}},
+                      {"sightings", sightings},
+                      {"first_seen_frame", first_seen_frame},
+                      {"last_seen_frame", last_seen_frame},
+                      {"first_seen_s", first_seen_s},
+                      {"last_seen_s", last_seen_s},
+                      {"crop", crop ? nlohmann::json(fmt::format("{}{}.jpg", crop_url_prefix, id))
+                                    : nlohmann::json(nullptr)}};
+  if (last.type == ConductorFaultType::kDamperTilted) j["roll_deg"] = last.roll_deg;
+  return j;
 }
 
 JpegBytes EncodeFaultCrop(const cv::Mat& left_rectified, const cv::Rect& box,
