@@ -38,6 +38,9 @@ int RunEvalFaults(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--defects", options.sequence.num_defects, "defects per sequence")
       ->capture_default_str();
+  app.add_option("--tilted-dampers", options.sequence.tilted_damper_share,
+                 "share of the dampers turned about the line by 10..25 deg")
+      ->capture_default_str();
   app.add_option("--supersampling", options.sequence.scene.sensor.supersampling,
                  "rays per pixel side of the renderer")
       ->capture_default_str();

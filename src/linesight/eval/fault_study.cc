@@ -1,6 +1,7 @@
 #include "linesight/eval/fault_study.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -30,9 +31,30 @@ int BinOf(const std::vector<double>& edges, double value) {
   return value == edges.back() ? static_cast<int>(edges.size()) - 2 : -1;
 }
 
-// The size a truth is binned by: birdcage relative to the conductor's radius, the rest in metres.
-double SizeOf(const sim::RenderedDefect& truth, double radius_m) {
-  return truth.type == sim::DefectType::kBirdcage ? truth.size_m / radius_m : truth.size_m;
+// A scored truth of a frame: a defect of the line, or a damaged fitting (a tilted damper).
+struct Truth {
+  std::string type;  // DefectTypeName, or "damper_tilted"
+  double arc_m = 0, arc_begin_m = 0, arc_end_m = 0;
+  // What it is binned by: birdcage radius increase relative to the radius, a tilted damper's tilt
+  // (deg), the rest in metres.
+  double size = 0;
+  int visible_pixels = 0;
+};
+
+std::vector<Truth> TruthsOf(const sim::PowerLineScene& scene, double radius_m) {
+  std::vector<Truth> truths;
+  for (const sim::RenderedDefect& d : scene.defects) {
+    truths.push_back({sim::DefectTypeName(d.type), d.arc_m, d.arc_begin_m, d.arc_end_m,
+                      d.type == sim::DefectType::kBirdcage ? d.size_m / radius_m : d.size_m,
+                      d.visible_pixels});
+  }
+  for (const sim::RenderedObstacle& o : scene.obstacles) {
+    if (o.tilt_deg == 0) continue;
+    const std::array<double, 2> extent = sim::ObstacleAlongExtent(o.type);
+    truths.push_back({"damper_tilted", o.arc_m, o.arc_m + extent[0], o.arc_m + extent[1],
+                      std::fabs(o.tilt_deg), o.visible_pixels});
+  }
+  return truths;
 }
 
 std::string Percent(const FaultRates& r) {
@@ -44,6 +66,7 @@ std::string Percent(const FaultRates& r) {
 FaultStudyOptions::FaultStudyOptions() {
   sequence.scene.sensor.supersampling = 2;
   sequence.num_defects = 4;
+  sequence.tilted_damper_share = 0.5;
 }
 
 void FaultStudyOptions::Check() const {
@@ -89,14 +112,14 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
   report.machine = MachineDescription();
   report.bin_edges = options.bin_edges;
   for (sim::DefectType t : sim::AllDefectTypes()) report.types.push_back(sim::DefectTypeName(t));
+  report.types.push_back("damper_tilted");
   report.by_type.resize(report.types.size());
   report.by_type_and_bin.assign(report.types.size(),
                                 std::vector<FaultRates>(options.bin_edges.size() - 1));
-  report.size_edges = {{"birdcage", {0.1, 0.2, 0.35, 0.5}},
-                       {"broken_strands", {0.003, 0.01, 0.025, 0.05}},
-                       {"string", {0.05, 0.2, 0.6}},
-                       {"sheet", {0.05, 0.15, 0.4}},
-                       {"nest", {0.15, 0.25, 0.4}}};
+  report.size_edges = {
+      {"birdcage", {0.1, 0.2, 0.35, 0.5}}, {"broken_strands", {0.003, 0.01, 0.025, 0.05}},
+      {"string", {0.05, 0.2, 0.6}},        {"sheet", {0.05, 0.15, 0.4}},
+      {"nest", {0.15, 0.25, 0.4}},         {"damper_tilted", {10, 15, 20, 25}}};
   for (const auto& [name, edges] : report.size_edges) {
     report.by_size[name].resize(edges.size() - 1);
   }
@@ -137,9 +160,10 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
           faults.push_back(static_cast<int>(k));
         }
       }
+      const std::vector<Truth> all_truths = TruthsOf(scene, radius);
       std::vector<int> truths;
-      for (size_t t = 0; t < scene.defects.size(); ++t) {
-        const sim::RenderedDefect& d = scene.defects[t];
+      for (size_t t = 0; t < all_truths.size(); ++t) {
+        const Truth& d = all_truths[t];
         if (d.arc_m >= options.min_arc_m && d.arc_m <= options.max_arc_m &&
             d.visible_pixels >= options.min_visible_pixels) {
           truths.push_back(static_cast<int>(t));
@@ -152,8 +176,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
       std::vector<Pair> pairs;
       for (int k : faults) {
         const ConductorFault& f = inspection.faults[k];
-        for (size_t t = 0; t < scene.defects.size(); ++t) {
-          const sim::RenderedDefect& d = scene.defects[t];
+        for (size_t t = 0; t < all_truths.size(); ++t) {
+          const Truth& d = all_truths[t];
           if (f.arc_end_m >= d.arc_begin_m - options.match_margin_m &&
               f.arc_begin_m <= d.arc_end_m + options.match_margin_m) {
             pairs.push_back({std::fabs(f.arc_m - d.arc_m), k, static_cast<int>(t)});
@@ -162,7 +186,7 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
       }
       std::sort(pairs.begin(), pairs.end(),
                 [](const Pair& a, const Pair& b) { return a.gap < b.gap; });
-      std::vector<int> fault_of_truth(scene.defects.size(), -1);
+      std::vector<int> fault_of_truth(all_truths.size(), -1);
       std::vector<char> fault_used(inspection.faults.size(), 0);
       for (const Pair& p : pairs) {
         if (fault_used[p.fault] || fault_of_truth[p.truth] >= 0) continue;
@@ -170,8 +194,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         fault_of_truth[p.truth] = p.fault;
       }
       for (int t : truths) {
-        const sim::RenderedDefect& d = scene.defects[t];
-        const std::string type = sim::DefectTypeName(d.type);
+        const Truth& d = all_truths[t];
+        const std::string& type = d.type;
         const int k = fault_of_truth[t];
         const bool typed = k >= 0 && ConductorFaultTypeName(inspection.faults[k].type) == type;
         auto count = [&](FaultRates* r) {
@@ -184,7 +208,7 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         count(&report.by_type[ti]);
         const int bin = BinOf(options.bin_edges, d.arc_m);
         if (bin >= 0) count(&report.by_type_and_bin[ti][bin]);
-        const int size_bin = BinOf(report.size_edges[type], SizeOf(d, radius));
+        const int size_bin = BinOf(report.size_edges[type], d.size);
         if (size_bin >= 0) count(&report.by_size[type][size_bin]);
       }
       // A fault that overlaps a truth (scored or not: one barely in view) is not a false alarm.
@@ -192,7 +216,7 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         if (fault_used[k]) continue;
         const ConductorFault& f = inspection.faults[k];
         bool on_truth = false;
-        for (const sim::RenderedDefect& d : scene.defects) {
+        for (const Truth& d : all_truths) {
           on_truth |= f.arc_end_m >= d.arc_begin_m - options.match_margin_m &&
                       f.arc_begin_m <= d.arc_end_m + options.match_margin_m;
         }
@@ -215,6 +239,28 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         }
         if (!on_truth) report.clean_inspected_m += std::fabs(b.arc_m - a.arc_m);
       }
+      // The dampers' roll against their true tilt, and how often a sound one is flagged.
+      for (const FittingState& state : inspection.fittings) {
+        const LineObstacle& ob = line.obstacles[state.obstacle];
+        if (!std::isfinite(state.roll_deg) || ob.arc_m < options.min_arc_m ||
+            ob.arc_m > options.max_arc_m) {
+          continue;
+        }
+        for (const sim::RenderedObstacle& o : scene.obstacles) {
+          const std::array<double, 2> extent = sim::ObstacleAlongExtent(o.type);
+          if (o.type != sim::ObstacleType::kDamper || ob.arc_m > o.arc_m + extent[1] ||
+              ob.arc_m + ob.length_m < o.arc_m + extent[0]) {
+            continue;
+          }
+          report.damper_roll_errors_deg.push_back(state.roll_deg - o.tilt_deg);
+          if (o.tilt_deg == 0) {
+            ++report.sound_damper_checks;
+            report.sound_dampers_flagged +=
+                std::fabs(state.roll_deg) >= options.faults.max_damper_roll_deg;
+          }
+          break;
+        }
+      }
       if (progress != nullptr) progress->Advance(1, fmt::format("seed {} frame {}", seed, index));
     }
   }
@@ -226,6 +272,15 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
   report.elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
+}
+
+double FaultStudyReport::RollErrorQuantile(double q) const {
+  if (damper_roll_errors_deg.empty()) return 0.0;
+  std::vector<double> e;
+  for (double v : damper_roll_errors_deg) e.push_back(std::fabs(v));
+  const size_t k = std::min(e.size() - 1, static_cast<size_t>(q * (e.size() - 1) + 0.5));
+  std::nth_element(e.begin(), e.begin() + k, e.end());
+  return e[k];
 }
 
 nlohmann::json FaultStudyReport::ToJson() const {
@@ -245,7 +300,12 @@ nlohmann::json FaultStudyReport::ToJson() const {
                       {"false_alarms_by_type", false_alarms_by_type},
                       {"clean_inspected_m", clean_inspected_m},
                       {"false_alarms_per_100m", false_alarms_per_100m()},
-                      {"radius_median_error", radius_median_error}};
+                      {"radius_median_error", radius_median_error},
+                      {"damper_roll_checks", damper_roll_errors_deg.size()},
+                      {"damper_roll_error_median_deg", RollErrorQuantile(0.5)},
+                      {"damper_roll_error_p90_deg", RollErrorQuantile(0.9)},
+                      {"sound_damper_checks", sound_damper_checks},
+                      {"sound_dampers_flagged", sound_dampers_flagged}};
   for (size_t t = 0; t < types.size(); ++t) {
     nlohmann::json entry = by_type[t].ToJson();
     entry["by_distance"] = nlohmann::json::array();
@@ -286,7 +346,8 @@ std::string FaultStudyReport::ToMarkdown() const {
         << (by_type[t].matched ? fmt::format("{:.2f}", by_type[t].type_accuracy()) : "-") << " |\n";
   }
   out << fmt::format("| all | | | | {} | {:.2f} |\n\n", Percent(all), all.type_accuracy());
-  out << "Recall by size (birdcage: radius increase relative to the radius; the others in m):\n\n";
+  out << "Recall by size (birdcage: radius increase relative to the radius; damper_tilted: tilt in "
+         "deg; the others in m):\n\n";
   for (const std::string& type : types) {
     const std::vector<double>& edges = size_edges.at(type);
     out << "- " << type << ":";
@@ -308,6 +369,13 @@ std::string FaultStudyReport::ToMarkdown() const {
   }
   out << fmt::format(".\n\nConductor radius from the image edges: median |error| {:.1f} %.\n",
                      100 * radius_median_error);
+  if (!damper_roll_errors_deg.empty()) {
+    out << fmt::format(
+        "\nDampers' roll about the line against their true tilt: |error| median {:.1f} deg, 90th "
+        "percentile {:.1f} deg over {} checks; sound dampers flagged as tilted: {} of {} checks.\n",
+        RollErrorQuantile(0.5), RollErrorQuantile(0.9), damper_roll_errors_deg.size(),
+        sound_dampers_flagged, sound_damper_checks);
+  }
   return out.str();
 }
 
