@@ -309,15 +309,14 @@ double OffsetAt(const std::vector<double>& arcs, const std::vector<double>& offs
   constexpr double kMinAxisSpanM = 0.2;
   const auto [lo, hi] = std::minmax_element(arcs.begin(), arcs.end());
   double a = Median(offsets), b = 0;
-  auto robust_spread = [&] {
-    std::vector<double> residuals;
-    for (size_t i = 0; i < arcs.size(); ++i) {
-      residuals.push_back(std::fabs(offsets[i] - a - b * (arcs[i] - arc)));
-    }
-    return 1.4826 * Median(residuals);
+  auto residuals = [&] {
+    std::vector<double> r;
+    for (size_t i = 0; i < arcs.size(); ++i)
+      r.push_back(std::fabs(offsets[i] - a - b * (arcs[i] - arc)));
+    return r;
   };
   if (*hi - *lo < kMinAxisSpanM || arcs.size() < 5) {
-    *spread = robust_spread();
+    *spread = 1.4826 * Median(residuals());
     return a;
   }
   std::vector<char> in(arcs.size(), 1);
@@ -336,14 +335,11 @@ double OffsetAt(const std::vector<double>& arcs, const std::vector<double>& offs
     if (n < 3 || det <= 1e-12) break;
     a = (sxx * sy - sx * sxy) / det;
     b = (n * sxy - sx * sy) / det;
-    std::vector<double> residuals;
-    for (size_t i = 0; i < arcs.size(); ++i) {
-      residuals.push_back(std::fabs(offsets[i] - a - b * (arcs[i] - arc)));
-    }
-    const double limit = std::max(0.002, 3 * 1.4826 * Median(residuals));
-    for (size_t i = 0; i < arcs.size(); ++i) in[i] = residuals[i] <= limit;
+    const std::vector<double> r = residuals();
+    const double limit = std::max(0.002, 3 * 1.4826 * Median(r));
+    for (size_t i = 0; i < arcs.size(); ++i) in[i] = r[i] <= limit;
   }
-  *spread = robust_spread();
+  *spread = 1.4826 * Median(residuals());
   return a;
 }
 
