@@ -10,6 +10,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/line/thin_attachments.h"
 
 namespace linesight {
 namespace {
@@ -299,6 +300,80 @@ void AddForeignObjects(const LineObstacles& line, const ConductorFaultOptions& o
   }
 }
 
+// Thin structures leaving the line at its depth (thin_attachments.h) up to max_arc_m, away from
+// the obstacles on the line (a fitting's parts are at the line's depth too) and from foreign
+// objects already reported: hanging ones are strings or, wider, sheets seen edge-on.
+void AddThinAttachments(const cv::Mat& left_rectified, const cv::Mat& right_rectified,
+                        const cv::Mat& disparity, const LineObstacles& line,
+                        const StereoGeometry& g, double radius_m, const ConductorFaultOptions& o,
+                        ConductorInspection* out) {
+  if (out->profile.empty()) return;
+  const ConductorCurve& curve = line.conductor.line;
+  double tau_from = out->profile.front().tau, tau_to = tau_from;
+  for (const RadiusSample& s : out->profile) {
+    tau_from = std::min(tau_from, s.tau);
+    tau_to = std::max(tau_to, s.tau);
+  }
+  // In colour where there is colour: a grey sheet on grey-green ground differs in hue.
+  cv::Mat left_float, right_float;
+  left_rectified.convertTo(left_float, CV_32F);
+  right_rectified.convertTo(right_float, CV_32F);
+  const std::vector<ThinAttachment> found = FindThinAttachments(
+      left_float, right_float, disparity, curve, g, radius_m, tau_from, tau_to, o.thin);
+  const size_t reported = out->faults.size();
+  // Each obstacle's pixels and those next to them (2 px).
+  std::vector<cv::Mat> near_obstacle(line.obstacles.size());
+  for (size_t k = 0; k < line.obstacles.size(); ++k) {
+    const LineObstacle& ob = line.obstacles[k];
+    if (ob.mask.empty()) continue;
+    cv::copyMakeBorder(ob.mask, near_obstacle[k], 2, 2, 2, 2, cv::BORDER_CONSTANT, 0);
+    cv::dilate(near_obstacle[k], near_obstacle[k],
+               cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 5)));
+  }
+  const double margin = o.fitting_margin_m + o.margin_m;
+  for (const ThinAttachment& a : found) {
+    if (a.arc_m < 0 || a.arc_m > o.max_arc_m) continue;
+    // A structure on an obstacle's stretch of the line, or mostly on or next to its pixels
+    // (whatever disparity the sweep found for it), is a part of it (a damper's messenger, a
+    // nest's twig) unless it reaches well below what the obstacle holds (a rope wrapped round
+    // the line reads as a clamp, and its hanging end is too thin to be part of that body).
+    bool taken = false;
+    for (size_t k = 0; k < line.obstacles.size(); ++k) {
+      const LineObstacle& ob = line.obstacles[k];
+      bool on = a.arc_m >= ob.arc_m - margin && a.arc_m <= ob.arc_m + ob.length_m + margin;
+      if (!on && !near_obstacle[k].empty()) {
+        const cv::Rect around(ob.box.x - 2, ob.box.y - 2, ob.box.width + 4, ob.box.height + 4);
+        const cv::Rect both = around & a.box;
+        if (both.area() > 0) {
+          const int overlap =
+              cv::countNonZero(a.mask(both - a.box.tl()) & near_obstacle[k](both - around.tl()));
+          on = overlap >= o.max_on_obstacle_share * a.pixels;
+        }
+      }
+      taken |= on && a.length_m <= ob.below_m + o.beyond_obstacle_m;
+    }
+    for (size_t k = 0; k < reported; ++k) {
+      const ConductorFault& f = out->faults[k];
+      taken |= IsForeignObject(f.type) && a.arc_m >= f.arc_begin_m - margin &&
+               a.arc_m <= f.arc_end_m + margin;
+    }
+    // What hangs from the line: a string or a sheet swinging up to 45 deg from straight down.
+    const bool hanging = a.down_m >= std::fabs(a.side_m);
+    if (taken || !hanging) continue;
+    ConductorFault f;
+    f.type =
+        a.width_m >= o.min_sheet_width_m ? ConductorFaultType::kSheet : ConductorFaultType::kString;
+    f.arc_m = a.arc_m;
+    f.arc_begin_m = a.arc_begin_m;
+    f.arc_end_m = a.arc_end_m;
+    f.distance_m = a.distance_m;
+    f.size_m = a.length_m;
+    f.box = a.box;
+    f.confidence = std::min(1.0, a.length_m / (2 * o.thin.min_length_m));
+    out->faults.push_back(f);
+  }
+}
+
 // The axis's offset from the model at `arc` (m), from samples (arcs[i], offsets[i]): the model's
 // axis is off by an amount that changes along the line (it is a straight fit to a biased
 // disparity), so a robust straight line through the samples, when they span at least
@@ -460,6 +535,8 @@ std::string ConductorFaultTypeName(ConductorFaultType type) {
       return "nest";
     case ConductorFaultType::kSheet:
       return "sheet";
+    case ConductorFaultType::kString:
+      return "string";
     case ConductorFaultType::kDamperTilted:
       return "damper_tilted";
   }
@@ -467,7 +544,8 @@ std::string ConductorFaultTypeName(ConductorFaultType type) {
 }
 
 bool IsForeignObject(ConductorFaultType type) {
-  return type == ConductorFaultType::kNest || type == ConductorFaultType::kSheet;
+  return type == ConductorFaultType::kNest || type == ConductorFaultType::kSheet ||
+         type == ConductorFaultType::kString;
 }
 
 std::string InspectionStatusName(InspectionStatus status) {
@@ -532,6 +610,14 @@ void ConductorFaultOptions::Check() const {
               damper_reach_m, "must be in (0, 1] m");
   CheckOption(max_axis_spread_m > 0, "ConductorFaultOptions.max_axis_spread_m", max_axis_spread_m,
               "must be > 0 m");
+  thin.Check();
+  CheckOption(min_sheet_width_m > 0, "ConductorFaultOptions.min_sheet_width_m", min_sheet_width_m,
+              "must be > 0 m");
+  CheckOption(beyond_obstacle_m >= 0, "ConductorFaultOptions.beyond_obstacle_m", beyond_obstacle_m,
+              "must be >= 0 m");
+  CheckOption(max_on_obstacle_share > 0 && max_on_obstacle_share <= 1,
+              "ConductorFaultOptions.max_on_obstacle_share", max_on_obstacle_share,
+              "must be in (0, 1]");
   CheckOption(max_damper_roll_deg > 0 && max_damper_roll_deg < 90,
               "ConductorFaultOptions.max_damper_roll_deg", max_damper_roll_deg,
               "must be in (0, 90) deg");
@@ -738,6 +824,8 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
         "against the background)",
         measured_count);
     AddForeignObjects(line, o, &out.faults);
+    AddThinAttachments(left_rectified, right_rectified, disparity, line, g, nominal_radius, o,
+                       &out);
     CheckDampers(line, out.profile, disparity, locator, g, nominal_radius, o, &out);
     return out;
   }
@@ -871,6 +959,7 @@ ConductorInspection InspectConductor(const cv::Mat& left_rectified, const cv::Ma
     out.faults.push_back(f);
   }
   AddForeignObjects(line, o, &out.faults);
+  AddThinAttachments(left_rectified, right_rectified, disparity, line, g, out.radius_m, o, &out);
   CheckDampers(line, out.profile, disparity, locator, g, out.radius_m, o, &out);
 
   std::sort(out.faults.begin(), out.faults.end(),

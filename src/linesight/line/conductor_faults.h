@@ -35,11 +35,16 @@
 // Foreign objects are the line obstacles whose shape is no fitting's (FindLineObstacles types them
 // "unknown": a mass on top of the line that spreads to its sides without rising into a string of
 // discs, or something hanging deeper than a damper's weights): "nest" on top, "sheet" hanging.
+// Thinner ones (a string or wire, a sheet seen edge-on: a few millimetres, thinner than any body
+// and than the dense matcher can see) are found by a sweep at the line's depth from the band's
+// edge outward (thin_attachments.h): one that hangs from the line (its far end within 45 deg of
+// straight down) and is not part of an obstacle on the line is a "string", or a "sheet" when it
+// is wider than min_sheet_width_m.
 // Damaged fittings: every damper on the line is checked for its roll about the conductor
 // (FittingState), measured about the axis that both views' band edges place beside it (the model's
 // own axis is ~1 cm off); one turned by more than max_damper_roll_deg is a "damper_tilted" fault.
-// Broken strands and hanging strings (a few millimetres thick, thinner than any body) are not
-// reported yet (on the tuning sequences the protrusions found 1 of 31 broken strands); a bird-cage
+// Broken strands (a 3.5 mm wire standing off by millimetres to a few centimetres, mostly along the
+// line) are not reported yet (on the tuning sequences the protrusions found 1 of 31); a bird-cage
 // where the line crosses the horizon or passes in front of ground of its own grey is missed
 // (docs/algorithms/faults.md).
 #pragma once
@@ -52,6 +57,7 @@
 
 #include "linesight/geometry/depth.h"
 #include "linesight/line/line_obstacles.h"
+#include "linesight/line/thin_attachments.h"
 
 namespace linesight {
 
@@ -61,14 +67,16 @@ enum class ConductorFaultType {
   // top of the line (a bird's nest) or hanging from it (a plastic sheet, a rag).
   kNest,
   kSheet,
+  // A thin structure hanging from the line at its depth: a string, a rope, a wire.
+  kString,
   // A damaged fitting: a damper turned about the line (its weights no longer hang straight down).
   kDamperTilted,
 };
-// "birdcage", "nest", "sheet" (the synthetic scene's defect names), "damper_tilted".
+// "birdcage", "nest", "sheet", "string" (the synthetic scene's defect names), "damper_tilted".
 std::string ConductorFaultTypeName(ConductorFaultType type);
-// Whether a fault is a foreign object (nest, sheet) rather than damage to the conductor. One object
-// may read as a nest in one frame and a sheet in the next (its extents above and below the line
-// are alike), so sightings of foreign objects are one kind.
+// Whether a fault is a foreign object (nest, sheet, string) rather than damage to the conductor.
+// One object may read as a nest in one frame and a sheet in the next (its extents above and below
+// the line are alike), so sightings of foreign objects are one kind.
 bool IsForeignObject(ConductorFaultType type);
 
 struct ConductorFaultOptions {
@@ -121,6 +129,15 @@ struct ConductorFaultOptions {
   int roll_min_points = 12;
   double axis_reach_m = 1.0;
   double max_damper_roll_deg = 7.0;
+  // Thin structures leaving the line (thin_attachments.h); a hanging one at least this wide (m,
+  // mean over its length) is a sheet seen edge-on, a narrower one a string.
+  ThinAttachmentOptions thin;
+  double min_sheet_width_m = 0.02;
+  // A structure with at least this share of its pixels on or next to (2 px) an obstacle's mask, or
+  // on its stretch of the line, is part of that obstacle, unless it reaches beyond_obstacle_m
+  // farther below the line than the obstacle does (m).
+  double max_on_obstacle_share = 0.3;
+  double beyond_obstacle_m = 0.1;
   // Only points within damper_reach_m of the axis are the damper's (its weights' bottom hangs
   // 0.116 m under it; a tilted one's reaches no farther): a defect or another object next to it in
   // the image may be part of its pixels. The cross-sections' axes must agree within

@@ -172,6 +172,39 @@ TEST(ConductorFaultsTest, ANestOnTheLineIsAForeignObjectAndTheFittingsAreNot) {
   }
 }
 
+// A string hanging 20 cm from the line 1.2 m ahead and a 20 cm plastic sheet seen almost edge-on
+// 2 m ahead (both a few millimetres across in the image, thinner than any body) are each one
+// foreign-object fault on their stretch of the line, at their depth; the string's length is
+// measured within 25 %.
+TEST(ConductorFaultsTest, AHangingStringAndAnEdgeOnSheetAreForeignObjects) {
+  sim::PowerLineSceneOptions o;
+  o.sensor.supersampling = 2;
+  o.obstacles.clear();
+  o.defects = sim::ParseDefectSpecs("string:1.2:length=0.2,sheet:2.0:length=0.2");
+  const Inspected r = InspectScene(sim::RenderPowerLineScene(o));
+  if (std::getenv("FAULT_STUDY") != nullptr) {
+    Print(r.inspection);
+    for (const LineObstacle& ob : r.line.obstacles) {
+      std::printf("  obstacle %s arc %.2f m below %.2f m\n", LineObstacleTypeName(ob.type).c_str(),
+                  ob.arc_m, ob.below_m);
+    }
+  }
+  ASSERT_EQ(r.inspection.status, InspectionStatus::kOk);
+  ASSERT_EQ(r.scene.defects.size(), 2u);
+  ASSERT_EQ(r.inspection.faults.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    SCOPED_TRACE(k);
+    const sim::RenderedDefect& truth = r.scene.defects[k];
+    const ConductorFault& f = r.inspection.faults[k];
+    EXPECT_TRUE(IsForeignObject(f.type));
+    EXPECT_LE(f.arc_begin_m, truth.arc_end_m + 0.05);
+    EXPECT_GE(f.arc_end_m, truth.arc_begin_m - 0.05);
+    EXPECT_NEAR(f.distance_m, truth.distance_m, 0.05 * truth.distance_m);
+  }
+  EXPECT_EQ(r.inspection.faults[0].type, ConductorFaultType::kString);
+  EXPECT_NEAR(r.inspection.faults[0].size_m, 0.2, 0.05);
+}
+
 }  // namespace
 }  // namespace linesight
 

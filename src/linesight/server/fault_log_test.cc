@@ -107,18 +107,22 @@ TEST(FaultLog, KeepsApartFaultsOutsideTheGateAndOfOneFrame) {
   EXPECT_EQ(log.Update(2, 0.2, {Birdcage(1.6)}, {}, 0.0), std::vector<int>{3});
 }
 
-// A foreign object that reads as a nest in one frame and as a sheet in the next is one fault,
-// listed with its latest type; a bird-cage at the same place is another.
+// A foreign object that reads as a nest in one frame, as a sheet in the next and as a string (a
+// sheet seen edge-on) in the third is one fault, listed with its latest type; a bird-cage at the
+// same place is another.
 TEST(FaultLog, AForeignObjectIsOneFaultWhicheverWayItReads) {
   FaultLog log;
-  ConductorFault nest = Birdcage(1.0), sheet = Birdcage(1.02);
+  ConductorFault nest = Birdcage(1.0), sheet = Birdcage(1.02), string = Birdcage(0.98);
   nest.type = ConductorFaultType::kNest;
   sheet.type = ConductorFaultType::kSheet;
+  string.type = ConductorFaultType::kString;
   EXPECT_EQ(log.Update(0, 0.0, {nest}, {}, 0.0), std::vector<int>{1});
   EXPECT_EQ(log.Update(1, 0.1, {sheet, Birdcage(1.0)}, {}, 0.0), (std::vector<int>{1, 2}));
   ASSERT_NE(log.Find(1), nullptr);
   EXPECT_EQ(log.Find(1)->sightings, 2);
   EXPECT_EQ(log.Find(1)->last.type, ConductorFaultType::kSheet);
+  EXPECT_EQ(log.Update(2, 0.2, {string}, {}, 0.0), std::vector<int>{1});
+  EXPECT_EQ(log.Find(1)->last.type, ConductorFaultType::kString);
 }
 
 TEST(FaultLog, KeepsAtMostMaxFaultsAndDropsTheOneSeenLongestAgo) {
