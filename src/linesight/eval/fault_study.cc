@@ -41,6 +41,11 @@ struct Truth {
   int visible_pixels = 0;
 };
 
+// Whether the stretch [begin, end] of the line overlaps [truth_begin, truth_end] widened by margin.
+bool Overlaps(double begin, double end, double truth_begin, double truth_end, double margin) {
+  return end >= truth_begin - margin && begin <= truth_end + margin;
+}
+
 std::vector<Truth> TruthsOf(const sim::PowerLineScene& scene, double radius_m) {
   std::vector<Truth> truths;
   for (const sim::RenderedDefect& d : scene.defects) {
@@ -51,8 +56,9 @@ std::vector<Truth> TruthsOf(const sim::PowerLineScene& scene, double radius_m) {
   for (const sim::RenderedObstacle& o : scene.obstacles) {
     if (o.tilt_deg == 0) continue;
     const std::array<double, 2> extent = sim::ObstacleAlongExtent(o.type);
-    truths.push_back({"damper_tilted", o.arc_m, o.arc_m + extent[0], o.arc_m + extent[1],
-                      std::fabs(o.tilt_deg), o.visible_pixels});
+    truths.push_back({ConductorFaultTypeName(ConductorFaultType::kDamperTilted), o.arc_m,
+                      o.arc_m + extent[0], o.arc_m + extent[1], std::fabs(o.tilt_deg),
+                      o.visible_pixels});
   }
   return truths;
 }
@@ -112,14 +118,17 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
   report.machine = MachineDescription();
   report.bin_edges = options.bin_edges;
   for (sim::DefectType t : sim::AllDefectTypes()) report.types.push_back(sim::DefectTypeName(t));
-  report.types.push_back("damper_tilted");
+  report.types.push_back(ConductorFaultTypeName(ConductorFaultType::kDamperTilted));
   report.by_type.resize(report.types.size());
   report.by_type_and_bin.assign(report.types.size(),
                                 std::vector<FaultRates>(options.bin_edges.size() - 1));
   report.size_edges = {
-      {"birdcage", {0.1, 0.2, 0.35, 0.5}}, {"broken_strands", {0.003, 0.01, 0.025, 0.05}},
-      {"string", {0.05, 0.2, 0.6}},        {"sheet", {0.05, 0.15, 0.4}},
-      {"nest", {0.15, 0.25, 0.4}},         {"damper_tilted", {10, 15, 20, 25}}};
+      {"birdcage", {0.1, 0.2, 0.35, 0.5}},
+      {"broken_strands", {0.003, 0.01, 0.025, 0.05}},
+      {"string", {0.05, 0.2, 0.6}},
+      {"sheet", {0.05, 0.15, 0.4}},
+      {"nest", {0.15, 0.25, 0.4}},
+      {ConductorFaultTypeName(ConductorFaultType::kDamperTilted), {10, 15, 20, 25}}};
   for (const auto& [name, edges] : report.size_edges) {
     report.by_size[name].resize(edges.size() - 1);
   }
@@ -178,8 +187,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         const ConductorFault& f = inspection.faults[k];
         for (size_t t = 0; t < all_truths.size(); ++t) {
           const Truth& d = all_truths[t];
-          if (f.arc_end_m >= d.arc_begin_m - options.match_margin_m &&
-              f.arc_begin_m <= d.arc_end_m + options.match_margin_m) {
+          if (Overlaps(f.arc_begin_m, f.arc_end_m, d.arc_begin_m, d.arc_end_m,
+                       options.match_margin_m)) {
             pairs.push_back({std::fabs(f.arc_m - d.arc_m), k, static_cast<int>(t)});
           }
         }
@@ -217,8 +226,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         const ConductorFault& f = inspection.faults[k];
         bool on_truth = false;
         for (const Truth& d : all_truths) {
-          on_truth |= f.arc_end_m >= d.arc_begin_m - options.match_margin_m &&
-                      f.arc_begin_m <= d.arc_end_m + options.match_margin_m;
+          on_truth |= Overlaps(f.arc_begin_m, f.arc_end_m, d.arc_begin_m, d.arc_end_m,
+                               options.match_margin_m);
         }
         if (on_truth) continue;
         ++report.false_alarms;
@@ -234,8 +243,8 @@ FaultStudyReport RunFaultStudy(const FaultStudyOptions& options, ProgressBar* pr
         }
         bool on_truth = false;
         for (const sim::RenderedDefect& d : scene.defects) {
-          on_truth |= b.arc_m >= d.arc_begin_m - options.match_margin_m &&
-                      b.arc_m <= d.arc_end_m + options.match_margin_m;
+          on_truth |=
+              Overlaps(b.arc_m, b.arc_m, d.arc_begin_m, d.arc_end_m, options.match_margin_m);
         }
         if (!on_truth) report.clean_inspected_m += std::fabs(b.arc_m - a.arc_m);
       }
