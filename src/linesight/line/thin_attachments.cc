@@ -201,6 +201,7 @@ std::vector<ThinAttachment> FindThinAttachments(const cv::Mat& left, const cv::M
   // 0: on no structure; k > 0: on structure k.
   cv::Mat label = cv::Mat::zeros(left.size(), CV_32SC1);
   cv::Mat found_d(left.size(), CV_32FC1, cv::Scalar(0));  // disparity of a structure's pixel
+  cv::Mat tried = cv::Mat::zeros(left.size(), CV_8UC1);   // ring pixels tried as seeds
   std::vector<std::vector<Pixel>> structures;
   struct Seed {
     double tau, reach_px, d;
@@ -219,7 +220,12 @@ std::vector<ThinAttachment> FindThinAttachments(const cv::Mat& left, const cv::M
       for (int k = 1; k <= 2; ++k) {
         const cv::Point2d q = c + side * (band + k) * curve.normal;
         const cv::Point p(static_cast<int>(std::lround(q.x)), static_cast<int>(std::lround(q.y)));
-        if (!image.contains(p) || label.at<int>(p) != 0 || in_band(p.x, p.y)) continue;
+        // Neighbouring points of the line round to the same ring pixel: it is tried once.
+        if (!image.contains(p) || label.at<int>(p) != 0 || tried.at<std::uint8_t>(p) != 0 ||
+            in_band(p.x, p.y)) {
+          continue;
+        }
+        tried.at<std::uint8_t>(p) = 1;
         // Up to the disparity seed_reach_m nearer: a structure hanging from a nearer point of the
         // line may run beside the band before it leaves it (a string swung sideways, which the
         // view foreshortens along the line's image).
