@@ -11,6 +11,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/line/line_quantile.h"
 #include "linesight/ranging/thin_structures.h"
 #include "linesight/stereo/matcher.h"
 
@@ -60,13 +61,7 @@ cv::Mat Despeckle(const cv::Mat& disparity, const LineObstacleOptions& o) {
   return out;
 }
 
-// q-quantile (0..1) of values (copied).
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
-}
+using line_detail::Quantile;
 
 cv::Point3d BackProjectAt(const StereoGeometry& g, double u, double v, double z) {
   return {(u - g.cx) * z / g.focal_px, (v - g.cy) * z / g.focal_px, z};

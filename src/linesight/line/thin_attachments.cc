@@ -9,6 +9,7 @@
 
 #include "linesight/core/disparity.h"
 #include "linesight/core/error.h"
+#include "linesight/line/line_quantile.h"
 
 namespace linesight {
 namespace {
@@ -36,13 +37,6 @@ double Distance(const cv::Mat& left, const cv::Mat& right, int x, int y, double 
     sum += std::fabs(l[c] - ((1 - fx) * r[c] + fx * r[c + channels]));
   }
   return sum;
-}
-
-double QuantileOf(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  return v[k];
 }
 
 struct Pixel {
@@ -332,9 +326,9 @@ std::vector<ThinAttachment> FindThinAttachments(const cv::Mat& left, const cv::M
       y1 = std::max(y1, p.y);
     }
     // How far it gets from the line's point where it was found, and how far it leaves the band.
-    const double reach_px = QuantileOf(from_root, 0.95);
+    const double reach_px = line_detail::Quantile(from_root, 0.95);
     const double length = (reach_px - radius_px) * pixel_m;
-    const double leaves = (QuantileOf(lateral, 0.95) - radius_px) * pixel_m;
+    const double leaves = (line_detail::Quantile(lateral, 0.95) - radius_px) * pixel_m;
     if (length < o.min_length_m || reach_px < o.min_reach_px || leaves < 0.5 * o.min_length_m) {
       continue;
     }
@@ -348,7 +342,7 @@ std::vector<ThinAttachment> FindThinAttachments(const cv::Mat& left, const cv::M
     a.box = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1);
     a.mask = cv::Mat::zeros(a.box.size(), CV_8UC1);
     for (const Pixel& p : s) a.mask.at<std::uint8_t>(p.y - y0, p.x - x0) = 255;
-    a.disparity_px = QuantileOf(disparities, 0.5);
+    a.disparity_px = line_detail::Quantile(disparities, 0.5);
     a.root_tau = root.tau;
     a.distance_m = root_z;
     a.arc_m = locator.Locate({(at.x - g.cx) * pixel_m, (at.y - g.cy) * pixel_m, root_z}).arc_m;
